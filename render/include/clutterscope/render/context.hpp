@@ -1,0 +1,49 @@
+#pragma once
+
+// Headless OpenGL through EGL: device platform first, surfaceless Mesa as fallback, desktop GL
+// core with version fallback. One context per worker thread.
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+namespace clutterscope::render {
+
+// Rendering or GL/EGL runtime failure; the CLI maps it to exit code 4.
+class RenderError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct EglOptions {
+  // EGL device index to use; -1 picks a hardware device when one exists, else the software one.
+  int device_index = -1;
+};
+
+// An EGL display + GL context made current on the creating thread. Move-only; the shared
+// display is never terminated (that would kill other threads' contexts).
+class EglContext {
+ public:
+  static EglContext create(const EglOptions& options = {});  // throws RenderError
+
+  EglContext(EglContext&&) noexcept;
+  EglContext& operator=(EglContext&&) noexcept;
+  EglContext(const EglContext&) = delete;
+  EglContext& operator=(const EglContext&) = delete;
+  ~EglContext();
+
+  void make_current() const;           // for use on the thread that owns the context
+  std::string renderer() const;        // GL_RENDERER
+  std::string version() const;         // GL_VERSION
+  bool is_software() const;            // llvmpipe / softpipe
+
+ private:
+  struct State;
+  explicit EglContext(std::unique_ptr<State> state);
+  std::unique_ptr<State> state_;
+};
+
+// True when an EGL display can be opened at all (tests skip with a message when not).
+bool egl_available(std::string* why_not = nullptr);
+
+}  // namespace clutterscope::render

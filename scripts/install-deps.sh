@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Installs every Debian package clutterscope needs to build, test and run.
+# Idempotent: packages already present are skipped by apt. Uses sudo when not root.
+set -euo pipefail
+
+packages=(
+  # toolchain
+  build-essential cmake ninja-build pkg-config git
+  # libraries
+  libeigen3-dev nlohmann-json3-dev libcli11-dev libglm-dev libnanoflann-dev
+  libassimp-dev
+  libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-calib3d-dev
+  # headless OpenGL through libglvnd + Mesa (libgl1-mesa-dri is the software renderer)
+  libegl-dev libopengl-dev libgl-dev libegl1 libopengl0 libegl-mesa0 libgl1-mesa-dri
+  # tests
+  googletest libgtest-dev libgmock-dev
+  # report checks: a real browser and Jupyter to execute the exported notebook
+  chromium
+  jupyter-nbconvert python3-nbclient python3-nbformat python3-ipykernel
+  python3-pandas python3-matplotlib python3-jsonschema
+)
+
+missing=()
+for package in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$package")
+  fi
+done
+
+if [ "${#missing[@]}" -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+echo "install-deps: installing ${#missing[@]} packages: ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,13 @@
+#pragma once
+
+// Each command registers its subcommand and options on the app; the callback it installs runs
+// the command and throws on failure (see cli.cpp for the exit-code mapping). The returned
+// exit code (0, or 1 for --keep-going failures) is stored in *exit_code.
+
+#include <CLI/CLI.hpp>
+
+namespace clutterscope::tools {
+
+void add_render_command(CLI::App& app, int* exit_code);
+
+}  // namespace clutterscope::tools
