@@ -1,0 +1,70 @@
+#pragma once
+
+// Visibility of every GT instance of one image, in one of three modes:
+//  - rendered (default): Eq. 10 from the GT scene render, counted on the GPU
+//    (render::Renderer::count_visibility): K_i, v_i, V_i = v_i / K_i, V^s = sum v / sum K;
+//  - bop19 / bop18: bop_toolkit's calc_gt_info.py against the measured depth.
+// Both fill the six scene_gt_info.json fields; in rendered mode px_count_all keeps BOP's
+// 3W x 3H canvas meaning, px_count_valid is K_i (the in-image silhouette), px_count_visib is
+// v_i and visib_fract is V_i.
+
+#include <clutterscope/datasets/scene.hpp>
+#include <clutterscope/render/renderer.hpp>
+#include <clutterscope/visibility/bop_visibility.hpp>
+#include <clutterscope/visibility/eq10.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace clutterscope::visibility {
+
+enum class VisibilityMode { kRendered, kBop19, kBop18 };
+
+std::string to_string(VisibilityMode mode);
+// "rendered", "bop19", "bop18"; nullopt otherwise.
+std::optional<VisibilityMode> parse_visibility_mode(const std::string& text);
+
+struct VisibilityOptions {
+  VisibilityMode mode = VisibilityMode::kRendered;
+  double delta_mm = 15.0;  // BOP modes only
+  render::PixelCenter pixel_center = render::PixelCenter::kHalfPixel;
+  bool IsValid(std::string* why) const;
+  bool is_bop() const { return mode != VisibilityMode::kRendered; }
+};
+
+struct ObjectVisibility {
+  // Rendered mode: K_i and v_i. BOP modes: px_count_all and px_count_visib, so that V^s is
+  // the px_count_all-weighted mean of visib_fract as V^s is the K_i-weighted mean of V_i.
+  Eq10Counts counts;
+  BopGtInfo info;  // the scene_gt_info.json fields
+};
+
+struct ImageVisibility {
+  std::vector<ObjectVisibility> objects;   // in scene_gt order
+  std::optional<double> scene_visibility;  // V^s; nullopt when sum K_i = 0
+};
+
+// Per-instance masks (CV_8U, 0 or 255, image size): BOP's mask/ (silhouette in the image) and
+// mask_visib/ (the visible part: front surface in rendered mode, visib mask in BOP modes).
+struct ImageMasks {
+  std::vector<cv::Mat> silhouette;
+  std::vector<cv::Mat> visible;
+};
+
+// `objects`: the GT instances in scene_gt order (their labels are ignored). Throws
+// datasets::DatasetError (message starting with `where`, e.g. "scene 1, image 3: ") when an
+// object reaches behind the camera's near plane (its counts would be silently wrong), or when
+// a BOP mode gets no measured depth of the camera's size. measured_depth_mm: the measured
+// depth as load_bop_depth_mm returns it (BOP modes only; ignored otherwise). With `masks`,
+// also fills the masks (costs extra renders and readbacks).
+ImageVisibility compute_image_visibility(render::Renderer& renderer, const datasets::Camera& camera,
+                                         const std::vector<render::Instance>& objects,
+                                         const VisibilityOptions& options,
+                                         const cv::Mat& measured_depth_mm, const std::string& where,
+                                         ImageMasks* masks = nullptr);
+
+// The renderer's near plane (metres) that compute_image_visibility requires objects to be
+// beyond.
+double near_plane_m();
+
+}  // namespace clutterscope::visibility

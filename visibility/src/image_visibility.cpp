@@ -1,0 +1,184 @@
+#include <algorithm>
+#include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/visibility/image_visibility.hpp>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+
+namespace clutterscope::visibility {
+
+std::string to_string(VisibilityMode mode) {
+  switch (mode) {
+    case VisibilityMode::kRendered:
+      return "rendered";
+    case VisibilityMode::kBop19:
+      return "bop19";
+    case VisibilityMode::kBop18:
+      return "bop18";
+  }
+  return "rendered";
+}
+
+std::optional<VisibilityMode> parse_visibility_mode(const std::string& text) {
+  if (text == "rendered") return VisibilityMode::kRendered;
+  if (text == "bop19") return VisibilityMode::kBop19;
+  if (text == "bop18") return VisibilityMode::kBop18;
+  return std::nullopt;
+}
+
+bool VisibilityOptions::IsValid(std::string* why) const {
+  BopVisibilityOptions bop;
+  bop.delta_mm = delta_mm;
+  return bop.IsValid(why);
+}
+
+double near_plane_m() { return render::Intrinsics{}.near_m; }
+
+namespace {
+
+void check_in_front_of_camera(const std::vector<render::Instance>& objects, double near_m,
+                              const std::string& where) {
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    if (objects[i].mesh == nullptr) throw std::invalid_argument("instance without a mesh");
+    const Eigen::AlignedBox3f& bounds = objects[i].mesh->bounds();
+    double nearest = std::numeric_limits<double>::infinity();
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3f corner = bounds.corner(static_cast<Eigen::AlignedBox3f::CornerType>(c));
+      nearest = std::min(nearest, (objects[i].model_to_camera * corner.cast<double>()).z());
+    }
+    if (!(nearest > near_m)) {
+      std::ostringstream message;
+      message << where << "gt " << i << ": the object reaches behind the camera (nearest "
+              << "bounding-box corner at z = " << nearest * 1000.0
+              << " mm, must be beyond the near plane at " << near_m * 1000.0
+              << " mm); its visibility cannot be rendered";
+      throw datasets::DatasetError("", message.str());
+    }
+  }
+}
+
+std::vector<render::Instance> labelled(const std::vector<render::Instance>& objects) {
+  std::vector<render::Instance> instances = objects;
+  for (std::size_t i = 0; i < instances.size(); ++i) {
+    instances[i].label = static_cast<std::uint32_t>(i + 1);
+  }
+  return instances;
+}
+
+cv::Rect bounding_rect_of(const cv::Mat& mask) {
+  std::vector<cv::Point> points;
+  cv::findNonZero(mask, points);
+  return points.empty() ? cv::Rect() : cv::boundingRect(points);
+}
+
+void compute_rendered(render::Renderer& renderer, const render::Intrinsics& intrinsics,
+                      const std::vector<render::Instance>& instances, ImageVisibility* result,
+                      ImageMasks* masks) {
+  render::CountOptions count_options;
+  count_options.canvas_factor = 3;
+  const std::vector<render::InstanceCounts> counts =
+      renderer.count_visibility(intrinsics, instances, count_options);
+  for (std::size_t i = 0; i < instances.size(); ++i) {
+    ObjectVisibility& object = result->objects[i];
+    object.counts = {counts[i].silhouette_px, counts[i].visible_px};
+    BopGtInfo& info = object.info;
+    info.px_count_all = counts[i].canvas_silhouette_px;
+    info.px_count_valid = counts[i].silhouette_px;
+    info.px_count_visib = counts[i].visible_px;
+    info.visib_fract = object_visibility(counts[i].visible_px, counts[i].silhouette_px);
+    if (info.px_count_visib > 0) {  // bop_toolkit's rule for both boxes
+      info.bbox_obj = to_bop_box(counts[i].canvas_silhouette_bbox);
+      info.bbox_visib = to_bop_box(counts[i].visible_bbox);
+    }
+  }
+  if (!masks) return;
+  const render::DepthLabelImage scene = renderer.render(intrinsics, instances);
+  renderer.render_each_alone(intrinsics, instances, [&](const render::AloneView& view) {
+    cv::Mat silhouette(intrinsics.height, intrinsics.width, CV_8U, cv::Scalar(0));
+    if (!view.rect.empty()) silhouette(view.rect).setTo(255, view.depth > 0);
+    masks->silhouette[view.index] = silhouette;
+    masks->visible[view.index] = scene.labels == static_cast<int>(view.index + 1);
+  });
+}
+
+// bop_toolkit renders each object alone on the 3W x 3H canvas and crops the image out of it;
+// we do the same, restricted to each object's projected rectangle on that canvas.
+void compute_bop(render::Renderer& renderer, const render::Intrinsics& intrinsics,
+                 const datasets::Camera& camera, const std::vector<render::Instance>& instances,
+                 const VisibilityOptions& options, const cv::Mat& measured_depth_mm,
+                 ImageVisibility* result, ImageMasks* masks) {
+  const int width = intrinsics.width, height = intrinsics.height;
+  const BopCamera bop_camera{camera.fx(), camera.fy(), camera.cx(), camera.cy()};
+  const BopVisibilityOptions bop_options{
+      options.mode == VisibilityMode::kBop19 ? BopMode::kBop19 : BopMode::kBop18, options.delta_mm};
+  const cv::Rect image_on_canvas(width, height, width, height);
+  renderer.render_each_alone(intrinsics.enlarged(3), instances, [&](const render::AloneView& view) {
+    CanvasSilhouette silhouette;
+    cv::Mat model_mm(height, width, CV_32F, cv::Scalar(0));
+    if (!view.rect.empty()) {
+      const cv::Mat mask = view.depth > 0;
+      silhouette.pixel_count = cv::countNonZero(mask);
+      const cv::Rect box = bounding_rect_of(mask);
+      if (!box.empty()) silhouette.bbox = box + view.rect.tl() - image_on_canvas.tl();
+      const cv::Rect overlap = view.rect & image_on_canvas;
+      if (!overlap.empty()) {
+        // The BOP boundary: metres -> millimetres.
+        view.depth(overlap - view.rect.tl())
+            .convertTo(model_mm(overlap - image_on_canvas.tl()), CV_32F, 1000.0);
+      }
+    }
+    cv::Mat visib;
+    ObjectVisibility& object = result->objects[view.index];
+    object.info = compute_bop_gt_info(model_mm, silhouette, measured_depth_mm, bop_camera,
+                                      bop_options, masks ? &visib : nullptr);
+    // V^s in BOP modes: sum px_count_visib / sum px_count_all, the px_count_all-weighted
+    // mean of visib_fract.
+    object.counts = {object.info.px_count_all, object.info.px_count_visib};
+    if (masks) {
+      masks->silhouette[view.index] = model_mm > 0;
+      masks->visible[view.index] = visib * 255;
+    }
+  });
+}
+
+}  // namespace
+
+ImageVisibility compute_image_visibility(render::Renderer& renderer, const datasets::Camera& camera,
+                                         const std::vector<render::Instance>& objects,
+                                         const VisibilityOptions& options,
+                                         const cv::Mat& measured_depth_mm, const std::string& where,
+                                         ImageMasks* masks) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument(why);
+  const render::Intrinsics intrinsics =
+      render::Intrinsics::from_camera(camera, options.pixel_center);
+  check_in_front_of_camera(objects, intrinsics.near_m, where);
+  if (options.is_bop() &&
+      (measured_depth_mm.type() != CV_32F || measured_depth_mm.cols != camera.width ||
+       measured_depth_mm.rows != camera.height)) {
+    throw datasets::DatasetError("", where + "BOP visibility needs the measured depth (" +
+                                         std::to_string(camera.width) + "x" +
+                                         std::to_string(camera.height) + ", mm)");
+  }
+  ImageVisibility result;
+  result.objects.resize(objects.size());
+  if (masks) {
+    masks->silhouette.assign(objects.size(), cv::Mat());
+    masks->visible.assign(objects.size(), cv::Mat());
+  }
+  if (objects.empty()) return result;
+  const std::vector<render::Instance> instances = labelled(objects);
+  if (options.is_bop()) {
+    compute_bop(renderer, intrinsics, camera, instances, options, measured_depth_mm, &result,
+                masks);
+  } else {
+    compute_rendered(renderer, intrinsics, instances, &result, masks);
+  }
+  std::vector<Eq10Counts> counts;
+  for (const ObjectVisibility& object : result.objects) counts.push_back(object.counts);
+  result.scene_visibility = scene_visibility(counts);
+  return result;
+}
+
+}  // namespace clutterscope::visibility
