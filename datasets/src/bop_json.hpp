@@ -1,0 +1,55 @@
+#pragma once
+
+// JSON helpers shared by the BOP reader and writer: parsing with errors that say where, typed
+// field access with validation, and bop_toolkit's save_json layout.
+
+#include <Eigen/Core>
+#include <clutterscope/datasets/errors.hpp>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace clutterscope::datasets::detail {
+
+using Json = nlohmann::json;
+
+// Reads and parses a JSON file. `where` ("scene 3: " or "") prefixes error messages. A parse
+// error names the parser's message and the top-level key and field it happened in.
+Json read_json_file(const std::filesystem::path& path, const std::string& where);
+
+// Where a field lives: the file and the location prefix ("scene 3, image 12, gt 4: ").
+struct FieldContext {
+  std::filesystem::path file;
+  std::string where;
+
+  [[noreturn]] void fail(const std::string& message) const;
+};
+
+// The value of `field` in `object`; DatasetError when missing.
+const Json& require_field(const Json& object, const char* field, const FieldContext& context);
+// A finite number.
+double finite_number(const Json& value, const char* field, const FieldContext& context);
+// An integer (a JSON number with no fractional part).
+int integer(const Json& value, const char* field, const FieldContext& context);
+// Exactly `count` finite numbers.
+std::vector<double> finite_numbers(const Json& value, const char* field, size_t count,
+                                   const FieldContext& context);
+// A 3x3 matrix from 9 row-major values.
+Eigen::Matrix3d row_major_matrix(const Json& value, const char* field, const FieldContext& context);
+// A rotation: 9 row-major values, orthonormal within `tolerance` and det = +1.
+Eigen::Matrix3d rotation(const Json& value, const char* field, const FieldContext& context,
+                         double tolerance = 1e-3);
+Eigen::Vector3d vector3(const Json& value, const char* field, const FieldContext& context);
+
+// Parses an object key as an integer id ("12" -> 12); DatasetError otherwise.
+int key_as_id(const std::string& key, const char* what, const FieldContext& context);
+
+// Python's json.dumps(value, sort_keys=True): ", " and ": " separators, keys sorted.
+std::string python_dumps(const Json& value);
+// bop_toolkit's inout.save_json of a dict with integer keys: one entry per line, keys sorted
+// numerically.
+std::string bop_dump(const std::map<int, Json>& entries);
+
+}  // namespace clutterscope::datasets::detail

@@ -1,0 +1,604 @@
+#include <algorithm>
+#include <cctype>
+#include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/datasets/errors.hpp>
+#include <cmath>
+#include <cstdio>
+#include <list>
+#include <opencv2/imgcodecs.hpp>
+#include <set>
+
+#include "bop_json.hpp"
+#include "image_size.hpp"
+
+namespace clutterscope::datasets {
+
+namespace fs = std::filesystem;
+using detail::FieldContext;
+using detail::Json;
+
+namespace {
+
+std::string six_digits(int id) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%06d", id);
+  return text;
+}
+
+bool all_digits(const std::string& text) {
+  return !text.empty() && text.size() <= 9 && std::all_of(text.begin(), text.end(), [](char c) {
+    return std::isdigit(static_cast<unsigned char>(c));
+  });
+}
+
+std::string join(const std::vector<std::string>& items) {
+  std::string text;
+  for (const auto& item : items) text += (text.empty() ? "" : ", ") + item;
+  return text.empty() ? "none" : text;
+}
+
+// The first of `candidates` (file names inside `dir`) that exists, else empty.
+fs::path first_existing(const fs::path& dir, std::initializer_list<std::string> candidates) {
+  std::error_code error;
+  for (const auto& name : candidates) {
+    const fs::path path = dir / name;
+    if (fs::is_regular_file(path, error)) return path;
+  }
+  return {};
+}
+
+fs::path depth_file(const fs::path& scene_dir, int im_id) {
+  const std::string id = six_digits(im_id);
+  return first_existing(scene_dir / "depth", {id + ".png", id + ".tif"});
+}
+
+fs::path rgb_file(const fs::path& scene_dir, int im_id) {
+  const std::string id = six_digits(im_id);
+  fs::path path = first_existing(scene_dir / "rgb", {id + ".png", id + ".jpg"});
+  if (path.empty()) path = first_existing(scene_dir / "gray", {id + ".tif", id + ".png"});
+  return path;
+}
+
+void require_object(const Json& json, const fs::path& path, const std::string& where,
+                    const char* keyed_by) {
+  if (!json.is_object()) {
+    throw DatasetError(
+        path, where + "expected a JSON object keyed by " + keyed_by + ", got " + json.type_name());
+  }
+}
+
+std::vector<int> sorted_ids(const Json& object, const fs::path& path, const std::string& where,
+                            const char* what) {
+  const FieldContext context{path, where};
+  std::vector<int> ids;
+  ids.reserve(object.size());
+  for (const auto& item : object.items())
+    ids.push_back(detail::key_as_id(item.key(), what, context));
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+std::vector<std::pair<int, int>> index_pairs(const Json& graph, const char* field, int count,
+                                             const FieldContext& context) {
+  std::vector<std::pair<int, int>> pairs;
+  const auto found = graph.find(field);
+  if (found == graph.end()) return pairs;
+  if (!found->is_array()) context.fail(std::string(field) + " must be an array of [a, b] pairs");
+  for (size_t i = 0; i < found->size(); ++i) {
+    const Json& pair = (*found)[i];
+    const std::string name = std::string(field) + "[" + std::to_string(i) + "]";
+    if (!pair.is_array() || pair.size() != 2) {
+      context.fail(name + " must be a pair [a, b] of instance indices, got " + pair.dump());
+    }
+    const int first = detail::integer(pair[0], name.c_str(), context);
+    const int second = detail::integer(pair[1], name.c_str(), context);
+    for (const int index : {first, second}) {
+      if (index < 0 || index >= count) {
+        context.fail(name + " has instance index " + std::to_string(index) +
+                     " outside scene_gt's " + std::to_string(count) + " instances");
+      }
+    }
+    if (first == second)
+      context.fail(name + " relates instance " + std::to_string(first) + " to itself");
+    pairs.emplace_back(first, second);
+  }
+  return pairs;
+}
+
+SceneGraph parse_graph(const Json& entry, int count, const FieldContext& context) {
+  if (!entry.is_object()) context.fail("scene graph entry must be an object, got " + entry.dump());
+  SceneGraph graph;
+  graph.support = index_pairs(entry, "support", count, context);
+  graph.non_contact = index_pairs(entry, "non_contact", count, context);
+  const auto fixed = entry.find("fixed");
+  if (fixed != entry.end()) {
+    if (!fixed->is_array()) context.fail("fixed must be an array of instance indices");
+    for (size_t i = 0; i < fixed->size(); ++i) {
+      const std::string name = "fixed[" + std::to_string(i) + "]";
+      const int index = detail::integer((*fixed)[i], name.c_str(), context);
+      if (index < 0 || index >= count) {
+        context.fail(name + " has instance index " + std::to_string(index) +
+                     " outside scene_gt's " + std::to_string(count) + " instances");
+      }
+      graph.fixed.push_back(index);
+    }
+  }
+  return graph;
+}
+
+}  // namespace
+
+bool BopOpenOptions::IsValid(std::string* why) const {
+  if (scene_cache_capacity < 1) {
+    if (why) *why = "scene_cache_capacity must be >= 1, got 0";
+    return false;
+  }
+  return true;
+}
+
+// One scene's parsed JSON. Immutable once built, shared with the loads that use it.
+struct BopDataset::SceneFiles {
+  std::string split;
+  int scene_id = 0;
+  fs::path dir;
+  Json camera;
+  Json gt;
+  std::optional<Json> graph;
+  std::optional<cv::Size> image_size;  // from the scene's first depth/rgb image
+};
+
+struct BopDataset::SceneCache {
+  explicit SceneCache(std::size_t capacity) : capacity(capacity) {}
+  std::size_t capacity;
+  std::mutex mutex;
+  std::list<std::shared_ptr<const SceneFiles>> scenes;  // most recently used first
+  std::set<int> checked_models;                         // model files found non-empty
+};
+
+BopDataset::BopDataset() = default;
+BopDataset::BopDataset(BopDataset&&) noexcept = default;
+BopDataset& BopDataset::operator=(BopDataset&&) noexcept = default;
+BopDataset::~BopDataset() = default;
+
+BopDataset BopDataset::open(const fs::path& root) { return open(root, BopOpenOptions{}); }
+
+BopDataset BopDataset::open(const fs::path& root, const BopOpenOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("BopOpenOptions: " + why);
+  std::error_code error;
+  if (!fs::is_directory(root, error)) throw DatasetError(root, "dataset folder is missing");
+
+  BopDataset dataset;
+  dataset.root_ = root;
+  dataset.cache_ = std::make_unique<SceneCache>(options.scene_cache_capacity);
+
+  const fs::path models_dir = root / "models";
+  const fs::path info_path = models_dir / "models_info.json";
+  const Json info = detail::read_json_file(info_path, "");
+  require_object(info, info_path, "", "obj_id");
+  for (const auto& item : info.items()) {
+    const FieldContext key_context{info_path, ""};
+    const int obj_id = detail::key_as_id(item.key(), "models_info", key_context);
+    const FieldContext context{info_path, "obj_id " + std::to_string(obj_id) + ": "};
+    const Json& entry = item.value();
+    const auto millimetres = [&](const char* field) {
+      return detail::finite_number(detail::require_field(entry, field, context), field, context) /
+             1000.0;
+    };
+    ModelInfo model;
+    model.obj_id = obj_id;
+    model.label = "obj_" + std::to_string(obj_id);
+    model.diameter = millimetres("diameter");
+    if (model.diameter <= 0) context.fail("diameter must be positive");
+    model.min = Eigen::Vector3d(millimetres("min_x"), millimetres("min_y"), millimetres("min_z"));
+    model.size =
+        Eigen::Vector3d(millimetres("size_x"), millimetres("size_y"), millimetres("size_z"));
+    if ((model.size.array() < 0).any()) context.fail("size_x/y/z must not be negative");
+    const auto file = entry.find("file");
+    if (file != entry.end()) {
+      if (!file->is_string() || file->get<std::string>().empty()) {
+        context.fail("file must be a non-empty string (mesh path relative to models/)");
+      }
+      const fs::path named = file->get<std::string>();
+      model.mesh_path = named.is_absolute() ? named : models_dir / named;
+    } else {
+      model.mesh_path = models_dir / ("obj_" + six_digits(obj_id) + ".ply");
+    }
+    dataset.models_.push_back(model);
+  }
+  std::sort(dataset.models_.begin(), dataset.models_.end(),
+            [](const ModelInfo& a, const ModelInfo& b) { return a.obj_id < b.obj_id; });
+  for (size_t i = 0; i < dataset.models_.size(); ++i) {
+    dataset.model_index_[dataset.models_[i].obj_id] = i;
+  }
+
+  const fs::path names_path = models_dir / "models_names.json";
+  if (fs::exists(names_path, error)) {
+    const Json names = detail::read_json_file(names_path, "");
+    require_object(names, names_path, "", "obj_id");
+    for (const auto& item : names.items()) {
+      const FieldContext context{names_path, ""};
+      const int obj_id = detail::key_as_id(item.key(), "models_names", context);
+      const FieldContext id_context{names_path, "obj_id " + std::to_string(obj_id) + ": "};
+      if (!dataset.has_model(obj_id)) id_context.fail("obj_id is not in models_info.json");
+      if (!item.value().is_string() || item.value().get<std::string>().empty()) {
+        id_context.fail("label must be a non-empty string, got " + item.value().dump());
+      }
+      dataset.models_[dataset.model_index_.at(obj_id)].label = item.value().get<std::string>();
+    }
+  }
+
+  const fs::path camera_path = root / "camera.json";
+  if (fs::exists(camera_path, error)) {
+    const Json camera = detail::read_json_file(camera_path, "");
+    const FieldContext context{camera_path, ""};
+    RootCamera root_camera;
+    root_camera.width =
+        detail::integer(detail::require_field(camera, "width", context), "width", context);
+    root_camera.height =
+        detail::integer(detail::require_field(camera, "height", context), "height", context);
+    if (root_camera.width <= 0 || root_camera.height <= 0) {
+      context.fail("width and height must be positive");
+    }
+    const auto scale = camera.find("depth_scale");
+    if (scale != camera.end()) {
+      root_camera.depth_scale = detail::finite_number(*scale, "depth_scale", context);
+      if (*root_camera.depth_scale <= 0) context.fail("depth_scale must be positive");
+    }
+    dataset.root_camera_ = root_camera;
+  }
+  return dataset;
+}
+
+const ModelInfo& BopDataset::model(int obj_id) const {
+  const auto found = model_index_.find(obj_id);
+  if (found == model_index_.end()) {
+    throw DatasetError(root_ / "models" / "models_info.json",
+                       "obj_id " + std::to_string(obj_id) + " is not in models_info.json");
+  }
+  return models_[found->second];
+}
+
+bool BopDataset::has_model(int obj_id) const { return model_index_.count(obj_id) > 0; }
+
+std::vector<std::string> BopDataset::splits() const {
+  std::vector<std::string> names;
+  std::error_code error;
+  for (const auto& entry : fs::directory_iterator(root_, error)) {
+    const std::string name = entry.path().filename().string();
+    if (!entry.is_directory(error) || name.rfind("models", 0) == 0) continue;
+    for (const auto& scene : fs::directory_iterator(entry.path(), error)) {
+      if (scene.is_directory(error) && all_digits(scene.path().filename().string())) {
+        names.push_back(name);
+        break;
+      }
+    }
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+std::vector<int> BopDataset::scene_ids(const std::string& split) const {
+  const fs::path dir = root_ / split;
+  std::error_code error;
+  if (split.empty() || !fs::is_directory(dir, error)) {
+    throw DatasetError(dir, "unknown split \"" + split + "\" (available: " + join(splits()) + ")");
+  }
+  std::vector<int> ids;
+  for (const auto& entry : fs::directory_iterator(dir, error)) {
+    const std::string name = entry.path().filename().string();
+    if (entry.is_directory(error) && all_digits(name)) ids.push_back(std::stoi(name));
+  }
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+std::vector<ImageKey> BopDataset::list_images(const DatasetSelection& selection) const {
+  std::vector<std::string> split_names = selection.splits.empty() ? splits() : selection.splits;
+  std::sort(split_names.begin(), split_names.end());
+  split_names.erase(std::unique(split_names.begin(), split_names.end()), split_names.end());
+  const std::set<int> wanted_scenes(selection.scene_ids.begin(), selection.scene_ids.end());
+  const std::set<int> wanted_images(selection.image_ids.begin(), selection.image_ids.end());
+  std::set<int> found_scenes;
+  std::set<int> found_images;
+  fs::path last_camera_path;
+  int scenes_visited = 0;
+
+  std::vector<ImageKey> keys;
+  for (const auto& split : split_names) {
+    for (const int scene_id : scene_ids(split)) {
+      if (!wanted_scenes.empty() && wanted_scenes.count(scene_id) == 0) continue;
+      found_scenes.insert(scene_id);
+      ++scenes_visited;
+      last_camera_path = root_ / split / six_digits(scene_id) / "scene_camera.json";
+      const std::string where = location(scene_id);
+      const Json camera = detail::read_json_file(last_camera_path, where);
+      require_object(camera, last_camera_path, where, "image id");
+      for (const int im_id : sorted_ids(camera, last_camera_path, where, "image")) {
+        if (!wanted_images.empty() && wanted_images.count(im_id) == 0) continue;
+        found_images.insert(im_id);
+        keys.push_back(ImageKey{split, scene_id, im_id});
+      }
+    }
+  }
+  for (const int scene_id : wanted_scenes) {
+    if (found_scenes.count(scene_id) == 0) {
+      throw DatasetError(split_names.size() == 1 ? root_ / split_names[0] : root_,
+                         "unknown scene " + std::to_string(scene_id) + " (not in split " +
+                             join(split_names) + ")");
+    }
+  }
+  for (const int im_id : wanted_images) {
+    if (found_images.count(im_id) == 0) {
+      throw DatasetError(scenes_visited == 1 ? last_camera_path : root_,
+                         "unknown image " + std::to_string(im_id) +
+                             " (not in scene_camera.json of the selected scenes)");
+    }
+  }
+  return keys;
+}
+
+std::shared_ptr<const BopDataset::SceneFiles> BopDataset::scene(const std::string& split,
+                                                                int scene_id) const {
+  {
+    std::lock_guard<std::mutex> lock(cache_->mutex);
+    auto& scenes = cache_->scenes;
+    for (auto it = scenes.begin(); it != scenes.end(); ++it) {
+      if ((*it)->scene_id == scene_id && (*it)->split == split) {
+        scenes.splice(scenes.begin(), scenes, it);
+        return scenes.front();
+      }
+    }
+  }
+  // Parse outside the lock so other threads keep loading cached scenes meanwhile.
+  std::error_code error;
+  const fs::path split_dir = root_ / split;
+  if (split.empty() || !fs::is_directory(split_dir, error)) {
+    throw DatasetError(split_dir,
+                       "unknown split \"" + split + "\" (available: " + join(splits()) + ")");
+  }
+  auto files = std::make_shared<SceneFiles>();
+  files->split = split;
+  files->scene_id = scene_id;
+  files->dir = split_dir / six_digits(scene_id);
+  const std::string where = location(scene_id);
+  if (scene_id < 0 || !fs::is_directory(files->dir, error)) {
+    throw DatasetError(files->dir,
+                       "unknown scene " + std::to_string(scene_id) + " in split \"" + split + "\"");
+  }
+  const fs::path camera_path = files->dir / "scene_camera.json";
+  const fs::path gt_path = files->dir / "scene_gt.json";
+  const fs::path graph_path = files->dir / "scene_graph.json";
+  files->camera = detail::read_json_file(camera_path, where);
+  require_object(files->camera, camera_path, where, "image id");
+  files->gt = detail::read_json_file(gt_path, where);
+  require_object(files->gt, gt_path, where, "image id");
+  if (fs::exists(graph_path, error)) {
+    files->graph = detail::read_json_file(graph_path, where);
+    require_object(*files->graph, graph_path, where, "image id");
+  }
+  const std::vector<int> ids = sorted_ids(files->camera, camera_path, where, "image");
+  if (!ids.empty()) {
+    fs::path image = depth_file(files->dir, ids.front());
+    if (image.empty()) image = rgb_file(files->dir, ids.front());
+    if (!image.empty()) {
+      files->image_size = detail::read_image_size(image);
+      if (!files->image_size) {
+        throw DatasetError(image, location(scene_id, ids.front()) + "cannot read the image size");
+      }
+    }
+  }
+
+  std::lock_guard<std::mutex> lock(cache_->mutex);
+  auto& scenes = cache_->scenes;
+  scenes.push_front(std::move(files));
+  while (scenes.size() > cache_->capacity) scenes.pop_back();
+  return scenes.front();
+}
+
+void BopDataset::check_model_file(const ModelInfo& model, const fs::path& scene_gt_path,
+                                  const std::string& where) const {
+  {
+    std::lock_guard<std::mutex> lock(cache_->mutex);
+    if (cache_->checked_models.count(model.obj_id) > 0) return;
+  }
+  std::error_code error;
+  const std::string what = where + "model file of obj_id " + std::to_string(model.obj_id);
+  const std::string referenced =
+      " (listed in models_info.json, used by " + scene_gt_path.string() + ")";
+  if (!fs::is_regular_file(model.mesh_path, error)) {
+    throw DatasetError(model.mesh_path, what + " is missing" + referenced);
+  }
+  if (fs::file_size(model.mesh_path, error) == 0 || error) {
+    throw DatasetError(model.mesh_path, what + " is empty" + referenced);
+  }
+  std::lock_guard<std::mutex> lock(cache_->mutex);
+  cache_->checked_models.insert(model.obj_id);
+}
+
+SceneView BopDataset::load(const ImageKey& key) const {
+  const std::shared_ptr<const SceneFiles> files = scene(key.split, key.scene_id);
+  const std::string image_where = location(key.scene_id, key.im_id);
+  const std::string im_key = std::to_string(key.im_id);
+  const fs::path camera_path = files->dir / "scene_camera.json";
+  const fs::path gt_path = files->dir / "scene_gt.json";
+  const fs::path graph_path = files->dir / "scene_graph.json";
+
+  SceneView view;
+  view.key = key;
+
+  const auto camera_entry = files->camera.find(im_key);
+  if (key.im_id < 0 || camera_entry == files->camera.end()) {
+    throw DatasetError(camera_path, location(key.scene_id) + "unknown image " + im_key +
+                                        " (scene_camera.json has " +
+                                        std::to_string(files->camera.size()) + " images)");
+  }
+  {
+    const FieldContext context{camera_path, image_where};
+    const Json& entry = *camera_entry;
+    Camera& camera = view.camera;
+    camera.K =
+        detail::row_major_matrix(detail::require_field(entry, "cam_K", context), "cam_K", context);
+    if (camera.fx() <= 0 || camera.fy() <= 0) context.fail("cam_K must have positive fx and fy");
+    if ((camera.K.row(2) - Eigen::RowVector3d(0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9) {
+      context.fail("cam_K's last row must be [0, 0, 1]");
+    }
+    camera.depth_scale = 1.0;
+    if (root_camera_ && root_camera_->depth_scale) camera.depth_scale = *root_camera_->depth_scale;
+    const auto scale = entry.find("depth_scale");
+    if (scale != entry.end()) {
+      camera.depth_scale = detail::finite_number(*scale, "depth_scale", context);
+      if (camera.depth_scale <= 0) context.fail("depth_scale must be positive");
+    }
+    const bool has_r = entry.contains("cam_R_w2c");
+    const bool has_t = entry.contains("cam_t_w2c");
+    if (has_r != has_t) context.fail("cam_R_w2c and cam_t_w2c must be given together");
+    if (has_r) {
+      Eigen::Isometry3d world_to_camera = Eigen::Isometry3d::Identity();
+      world_to_camera.linear() = detail::rotation(entry["cam_R_w2c"], "cam_R_w2c", context);
+      world_to_camera.translation() =
+          detail::vector3(entry["cam_t_w2c"], "cam_t_w2c", context) / 1000.0;
+      camera.world_to_camera = world_to_camera;
+    }
+    if (files->image_size) {
+      camera.width = files->image_size->width;
+      camera.height = files->image_size->height;
+    } else if (root_camera_) {
+      camera.width = root_camera_->width;
+      camera.height = root_camera_->height;
+    } else {
+      throw DatasetError(files->dir, image_where +
+                                         "image size unknown: the scene has no depth/rgb image "
+                                         "and the dataset root has no camera.json");
+    }
+  }
+
+  const auto gt_entry = files->gt.find(im_key);
+  if (gt_entry == files->gt.end()) {
+    throw DatasetError(gt_path, image_where + "image has no entry in scene_gt.json");
+  }
+  if (!gt_entry->is_array()) {
+    throw DatasetError(
+        gt_path, image_where + "entry must be a list of instances, got " + gt_entry->type_name());
+  }
+  for (size_t k = 0; k < gt_entry->size(); ++k) {
+    const FieldContext context{gt_path, location(key.scene_id, key.im_id, static_cast<int>(k))};
+    const Json& entry = (*gt_entry)[k];
+    GtInstance instance;
+    instance.obj_id =
+        detail::integer(detail::require_field(entry, "obj_id", context), "obj_id", context);
+    if (!has_model(instance.obj_id)) {
+      context.fail("obj_id " + std::to_string(instance.obj_id) + " is not in models_info.json");
+    }
+    check_model_file(model(instance.obj_id), gt_path, context.where);
+    instance.model_to_camera.linear() =
+        detail::rotation(detail::require_field(entry, "cam_R_m2c", context), "cam_R_m2c", context);
+    const Eigen::Vector3d t_mm =
+        detail::vector3(detail::require_field(entry, "cam_t_m2c", context), "cam_t_m2c", context);
+    if (t_mm.z() <= 0) {
+      context.fail("cam_t_m2c puts the object behind the camera (z = " + std::to_string(t_mm.z()) +
+                   " mm, must be > 0)");
+    }
+    instance.model_to_camera.translation() = t_mm / 1000.0;
+    view.objects.push_back(instance);
+  }
+
+  if (files->graph) {
+    const auto graph_entry = files->graph->find(im_key);
+    if (graph_entry != files->graph->end()) {
+      view.graph = parse_graph(*graph_entry, static_cast<int>(view.objects.size()),
+                               FieldContext{graph_path, image_where});
+    }
+  }
+
+  const auto detections = detections_.find({key.scene_id, key.im_id});
+  if (detections != detections_.end()) view.detections = detections->second;
+  view.depth_path = depth_file(files->dir, key.im_id);
+  view.rgb_path = rgb_file(files->dir, key.im_id);
+  return view;
+}
+
+void BopDataset::attach_detections(const fs::path& detections_json) {
+  const Json json = detail::read_json_file(detections_json, "");
+  if (!json.is_array()) {
+    throw DatasetError(detections_json,
+                       std::string("expected a JSON list of detections, got ") + json.type_name());
+  }
+  std::map<std::tuple<int, int>, std::vector<Detection>> detections;
+  for (size_t k = 0; k < json.size(); ++k) {
+    const Json& entry = json[k];
+    const FieldContext context{detections_json, "detection " + std::to_string(k) + ": "};
+    const auto field_integer = [&](const char* field) {
+      return detail::integer(detail::require_field(entry, field, context), field, context);
+    };
+    const int scene_id = field_integer("scene_id");
+    const int im_id = field_integer("image_id");
+    const FieldContext located{detections_json,
+                               "detection " + std::to_string(k) + ", " + location(scene_id, im_id)};
+    Detection detection;
+    detection.obj_id = field_integer("category_id");
+    if (!has_model(detection.obj_id)) {
+      located.fail("category_id " + std::to_string(detection.obj_id) +
+                   " is not in models_info.json");
+    }
+    detection.score =
+        detail::finite_number(detail::require_field(entry, "score", located), "score", located);
+    const std::vector<double> bbox =
+        detail::finite_numbers(detail::require_field(entry, "bbox", located), "bbox", 4, located);
+    if (bbox[2] < 0 || bbox[3] < 0) located.fail("bbox width and height must not be negative");
+    detection.bbox = Eigen::Vector4d(bbox[0], bbox[1], bbox[2], bbox[3]);
+    const auto time = entry.find("time");
+    if (time != entry.end()) detection.time = detail::finite_number(*time, "time", located);
+    detections[{scene_id, im_id}].push_back(detection);
+  }
+  detections_ = std::move(detections);
+}
+
+std::size_t BopDataset::cached_scene_count() const {
+  std::lock_guard<std::mutex> lock(cache_->mutex);
+  return cache_->scenes.size();
+}
+
+namespace {
+
+std::string describe_type(int type) {
+  const int depth = CV_MAT_DEPTH(type);
+  static const char* kDepthNames[] = {"8-bit unsigned", "8-bit signed", "16-bit unsigned",
+                                      "16-bit signed",  "32-bit int",   "32-bit float",
+                                      "64-bit float",   "16-bit float"};
+  return std::string(kDepthNames[depth]) + " with " + std::to_string(CV_MAT_CN(type)) +
+         " channel(s)";
+}
+
+}  // namespace
+
+cv::Mat load_depth(const SceneView& view) {
+  const std::string where = location(view.key.scene_id, view.key.im_id);
+  if (view.depth_path.empty()) {
+    throw DatasetError("", view.key.split + "/" + six_digits(view.key.scene_id) + ": " + where +
+                               "the dataset has no depth image for this view");
+  }
+  std::error_code error;
+  if (!fs::is_regular_file(view.depth_path, error)) {
+    throw DatasetError(view.depth_path, where + "depth image is missing");
+  }
+  const cv::Mat raw = cv::imread(view.depth_path.string(), cv::IMREAD_UNCHANGED);
+  if (raw.empty()) throw DatasetError(view.depth_path, where + "depth image cannot be decoded");
+  if (raw.type() != CV_16UC1) {
+    throw DatasetError(view.depth_path, where +
+                                            "depth image must be 16-bit unsigned with 1 "
+                                            "channel, got " +
+                                            describe_type(raw.type()));
+  }
+  if (raw.cols != view.camera.width || raw.rows != view.camera.height) {
+    throw DatasetError(view.depth_path, where + "depth image is " + std::to_string(raw.cols) + "x" +
+                                            std::to_string(raw.rows) + ", camera is " +
+                                            std::to_string(view.camera.width) + "x" +
+                                            std::to_string(view.camera.height));
+  }
+  cv::Mat metres;
+  raw.convertTo(metres, CV_32F, view.camera.depth_scale / 1000.0);
+  return metres;
+}
+
+}  // namespace clutterscope::datasets
