@@ -32,10 +32,10 @@ class EglContext {
   EglContext& operator=(const EglContext&) = delete;
   ~EglContext();
 
-  void make_current() const;           // for use on the thread that owns the context
-  std::string renderer() const;        // GL_RENDERER
-  std::string version() const;         // GL_VERSION
-  bool is_software() const;            // llvmpipe / softpipe
+  void make_current() const;     // for use on the thread that owns the context
+  std::string renderer() const;  // GL_RENDERER
+  std::string version() const;   // GL_VERSION
+  bool is_software() const;      // llvmpipe / softpipe
 
  private:
   struct State;

@@ -35,7 +35,15 @@ Mesh load_mesh(const std::filesystem::path& path, const MeshLoadOptions& options
 // fast hypothesis scoring. Returns the mesh unchanged when it is already small enough.
 Mesh decimate(const Mesh& mesh, std::size_t target_triangles);
 
+// An axis-aligned box centred on the origin with full extents `size` (metres), each face split
+// into subdivisions x subdivisions quads (12 * subdivisions^2 triangles; 13 gives ~2k), with
+// outward vertex normals. For tests, benchmarks and generated scenes.
+Mesh box_mesh(const Eigen::Vector3f& size, int subdivisions = 1);
+
 // Writes a binary little-endian PLY with vertex normals, in millimetres (BOP models).
-void write_ply(const std::filesystem::path& path, const Mesh& mesh, double scale_from_metres = 1000.0);
+// Vertices: x y z nx ny nz (float); faces: `property list uchar int vertex_indices`, as BOP's
+// models. Normals are computed (area-weighted) when the mesh has none. Written atomically.
+void write_ply(const std::filesystem::path& path, const Mesh& mesh,
+               double scale_from_metres = 1000.0);
 
 }  // namespace clutterscope::render

@@ -9,6 +9,7 @@
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/mesh.hpp>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -35,6 +36,10 @@ struct Intrinsics {
   Intrinsics enlarged(int factor) const;
   // The sub-window [x, x+w) x [y, y+h) of this image as its own target.
   Intrinsics crop(int x, int y, int w, int h) const;
+
+  // Throws std::invalid_argument unless focal lengths are > 0, sizes > 0 and
+  // 0 < near_m < far_m (all finite).
+  void validate() const;
 };
 
 // A mesh uploaded to the GPU of the current context. Move-only.
@@ -47,6 +52,9 @@ class GpuMesh {
   GpuMesh& operator=(const GpuMesh&) = delete;
   ~GpuMesh();
   std::size_t triangle_count() const;
+  // Model-frame bounds of the vertices (metres); used to crop renders to an object's
+  // projected rectangle.
+  const Eigen::AlignedBox3f& bounds() const;
 
  private:
   friend class Renderer;
@@ -81,12 +89,34 @@ struct TileAtlas {
   cv::Mat labels(std::size_t i) const { return atlas.labels(rects[i]); }
 };
 
-// Per-instance pixel counts computed without full-frame readbacks of each object.
+// Per-instance pixel counts computed without full-frame readbacks of each object. Rects are
+// cv::Rect covering the pixels (width = xmax - xmin + 1; BOP's bbox is one less), in image
+// pixel coordinates; an empty Rect when there is no such pixel.
 struct InstanceCounts {
-  std::int64_t silhouette_px = 0;  // pixels the object covers when rendered alone (K_i)
-  std::int64_t visible_px = 0;     // pixels where it is the front surface of the scene (v_i)
-  cv::Rect silhouette_bbox;        // bounding rect of the silhouette (empty if none)
-  cv::Rect visible_bbox;           // bounding rect of the visible pixels (empty if none)
+  std::int64_t silhouette_px = 0;  // in-image pixels the object covers when alone (K_i)
+  std::int64_t visible_px = 0;     // in-image pixels where it is the scene's front surface (v_i)
+  cv::Rect silhouette_bbox;        // bounding rect of the in-image silhouette
+  cv::Rect visible_bbox;           // bounding rect of the visible pixels
+  // The silhouette on the enlarged canvas of CountOptions::canvas_factor (equal to the
+  // in-image values when the factor is 1): bop_toolkit's px_count_all and bbox_obj. The rect
+  // may start at negative coordinates or end beyond the image.
+  std::int64_t canvas_silhouette_px = 0;
+  cv::Rect canvas_silhouette_bbox;
+};
+
+struct CountOptions {
+  // Also count silhouettes on a canvas this many times the image, centred on it (odd, >= 1;
+  // bop_toolkit uses 3). Only the part of the canvas that some object's projected bounds reach
+  // is rendered, so objects inside the image cost nothing extra.
+  int canvas_factor = 1;
+};
+
+// One object rendered alone (render_each_alone): its depth over the part of the target that
+// its projected bounds cover.
+struct AloneView {
+  std::size_t index = 0;  // into the instances passed in
+  cv::Rect rect;          // where `depth` lies in the target (clipped to it; may be empty)
+  cv::Mat depth;          // CV_32F camera-frame Z in metres of the object alone, 0 = not covered
 };
 
 class Renderer {
@@ -106,9 +136,25 @@ class Renderer {
   TileAtlas render_tiles(const std::vector<TileRequest>& requests);
 
   // Eq. 10 counts for every instance in one pass over the geometry: the silhouette of each
-  // object alone and the pixels where it is the front surface.
+  // object alone and the pixels where it is the front surface. One depth-tested draw per
+  // instance; the fragment shader ORs the instance's bit into a coverage image for every
+  // fragment, hidden ones included, while the label attachment keeps the front instance.
+  // Result i belongs to instances[i] (labels are not used). Needs GL 4.5; older contexts fall
+  // back to one render per object.
   std::vector<InstanceCounts> count_visibility(const Intrinsics& intrinsics,
-                                               const std::vector<Instance>& instances);
+                                               const std::vector<Instance>& instances,
+                                               const CountOptions& options = {});
+
+  // Renders every instance alone (no occlusion by the others), each cropped to its projected
+  // bounding rectangle within the target, all as tiles of one framebuffer with one readback,
+  // and calls `visit` once per instance in order. The views are valid during the call only.
+  // BOP visibility uses it for d_model, the depth of each object alone.
+  void render_each_alone(const Intrinsics& intrinsics, const std::vector<Instance>& instances,
+                         const std::function<void(const AloneView&)>& visit);
+
+  // The rectangle of the target that the instance's bounds project into, clipped to the
+  // target; the whole target when a corner of the bounds is closer than near_m (or behind).
+  static cv::Rect projected_rect(const Intrinsics& intrinsics, const Instance& instance);
 
  private:
   struct State;

@@ -1,0 +1,692 @@
+#include <algorithm>
+#include <clutterscope/render/renderer.hpp>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "gl.hpp"
+
+namespace clutterscope::render {
+
+// ---------------------------------------------------------------------------------------------
+// Intrinsics
+
+Intrinsics Intrinsics::from_camera(const datasets::Camera& camera, PixelCenter pixel_center) {
+  Intrinsics intrinsics;
+  intrinsics.fx = camera.fx();
+  intrinsics.fy = camera.fy();
+  intrinsics.cx = camera.cx();
+  intrinsics.cy = camera.cy();
+  intrinsics.width = camera.width;
+  intrinsics.height = camera.height;
+  intrinsics.pixel_center = pixel_center;
+  return intrinsics;
+}
+
+Intrinsics Intrinsics::enlarged(int factor) const {
+  if (factor < 1 || factor % 2 == 0) {
+    throw std::invalid_argument("Intrinsics::enlarged: factor must be odd and >= 1, got " +
+                                std::to_string(factor));
+  }
+  Intrinsics canvas = *this;
+  const int margin = (factor - 1) / 2;
+  canvas.cx += margin * width;
+  canvas.cy += margin * height;
+  canvas.width = factor * width;
+  canvas.height = factor * height;
+  return canvas;
+}
+
+Intrinsics Intrinsics::crop(int x, int y, int w, int h) const {
+  Intrinsics window = *this;
+  window.cx -= x;
+  window.cy -= y;
+  window.width = w;
+  window.height = h;
+  return window;
+}
+
+void Intrinsics::validate() const {
+  const bool finite = std::isfinite(fx) && std::isfinite(fy) && std::isfinite(cx) &&
+                      std::isfinite(cy) && std::isfinite(near_m) && std::isfinite(far_m);
+  if (!finite || !(fx > 0) || !(fy > 0)) {
+    throw std::invalid_argument("Intrinsics: focal lengths must be finite and > 0, got fx=" +
+                                std::to_string(fx) + " fy=" + std::to_string(fy));
+  }
+  if (width <= 0 || height <= 0) {
+    throw std::invalid_argument("Intrinsics: size must be > 0, got " + std::to_string(width) + "x" +
+                                std::to_string(height));
+  }
+  if (!(near_m > 0) || !(far_m > near_m)) {
+    throw std::invalid_argument("Intrinsics: need 0 < near_m < far_m, got near_m=" +
+                                std::to_string(near_m) + " far_m=" + std::to_string(far_m));
+  }
+}
+
+namespace {
+
+using Matrix4fColumnMajor = Eigen::Matrix<float, 4, 4, Eigen::ColMajor>;
+
+double pixel_shift(PixelCenter center) { return center == PixelCenter::kInteger ? 0.5 : 0.0; }
+
+// OpenCV camera (x right, y down) to GL clip space such that window coordinates equal image
+// coordinates (+0.5 for PixelCenter::kInteger): window row 0 is image row 0, so glReadPixels
+// returns the image top row first. Depth is reversed (near -> 1, far -> 0) for precision.
+Matrix4fColumnMajor projection_matrix(const Intrinsics& k, bool zero_to_one_clip) {
+  const double w = k.width, h = k.height, n = k.near_m, f = k.far_m;
+  const double shift = pixel_shift(k.pixel_center);
+  Eigen::Matrix4d p = Eigen::Matrix4d::Zero();
+  p(0, 0) = 2.0 * k.fx / w;
+  p(0, 2) = 2.0 * (k.cx + shift) / w - 1.0;
+  p(1, 1) = 2.0 * k.fy / h;
+  p(1, 2) = 2.0 * (k.cy + shift) / h - 1.0;
+  if (zero_to_one_clip) {  // z_ndc = n (f - Z) / (Z (f - n)): 1 at near, 0 at far
+    p(2, 2) = -n / (f - n);
+    p(2, 3) = n * f / (f - n);
+  } else {  // z_ndc in [-1, 1]: 1 at near, -1 at far
+    p(2, 2) = -(f + n) / (f - n);
+    p(2, 3) = 2.0 * n * f / (f - n);
+  }
+  p(3, 2) = 1.0;
+  return p.cast<float>();
+}
+
+constexpr const char* kVertexShader = R"(#version 330 core
+layout(location = 0) in vec3 position;
+uniform mat4 model_view;
+uniform mat4 projection;
+out float camera_z;
+void main() {
+  vec4 camera = model_view * vec4(position, 1.0);
+  camera_z = camera.z;
+  gl_Position = projection * camera;
+}
+)";
+
+constexpr const char* kDepthLabelFragmentShader = R"(#version 330 core
+in float camera_z;
+uniform uint label;
+layout(location = 0) out float depth_out;
+layout(location = 1) out uint label_out;
+void main() {
+  depth_out = camera_z;
+  label_out = label;
+}
+)";
+
+// No early_fragment_tests: the image store makes the shader run for hidden fragments too, so
+// the coverage image receives every instance's full silhouette while the depth test keeps the
+// front label.
+constexpr const char* kCoverageFragmentShader = R"(#version 430 core
+layout(binding = 0, r32ui) uniform uimage2DArray coverage;
+uniform int coverage_layer;
+uniform uint coverage_bit;
+uniform uint label;
+in float camera_z;
+layout(location = 0) out float depth_out;
+layout(location = 1) out uint label_out;
+void main() {
+  imageAtomicOr(coverage, ivec3(ivec2(gl_FragCoord.xy), coverage_layer), coverage_bit);
+  depth_out = camera_z;
+  label_out = label;
+}
+)";
+
+gl::Shader compile(GLenum type, const char* source) {
+  gl::Shader shader(glCreateShader(type));
+  glShaderSource(shader.get(), 1, &source, nullptr);
+  glCompileShader(shader.get());
+  GLint ok = GL_FALSE;
+  glGetShaderiv(shader.get(), GL_COMPILE_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    char log[2048] = {};
+    glGetShaderInfoLog(shader.get(), sizeof(log), nullptr, log);
+    throw RenderError(std::string("shader compilation failed: ") + log);
+  }
+  return shader;
+}
+
+struct Program {
+  gl::Program program;
+  GLint model_view = -1, projection = -1, label = -1, coverage_layer = -1, coverage_bit = -1;
+};
+
+Program link(const char* vertex_source, const char* fragment_source) {
+  const gl::Shader vertex = compile(GL_VERTEX_SHADER, vertex_source);
+  const gl::Shader fragment = compile(GL_FRAGMENT_SHADER, fragment_source);
+  Program result;
+  result.program = gl::Program(glCreateProgram());
+  const GLuint program = result.program.get();
+  glAttachShader(program, vertex.get());
+  glAttachShader(program, fragment.get());
+  glLinkProgram(program);
+  GLint ok = GL_FALSE;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    char log[2048] = {};
+    glGetProgramInfoLog(program, sizeof(log), nullptr, log);
+    throw RenderError(std::string("shader program link failed: ") + log);
+  }
+  glDetachShader(program, vertex.get());
+  glDetachShader(program, fragment.get());
+  result.model_view = glGetUniformLocation(program, "model_view");
+  result.projection = glGetUniformLocation(program, "projection");
+  result.label = glGetUniformLocation(program, "label");
+  result.coverage_layer = glGetUniformLocation(program, "coverage_layer");
+  result.coverage_bit = glGetUniformLocation(program, "coverage_bit");
+  return result;
+}
+
+void check_gl(const char* what) {
+  const GLenum error = glGetError();
+  if (error != GL_NO_ERROR) {
+    throw RenderError(std::string(what) + ": GL error 0x" + [&] {
+      char text[16];
+      std::snprintf(text, sizeof(text), "%x", error);
+      return std::string(text);
+    }());
+  }
+}
+
+bool has_gl_extension(const char* name) {
+  GLint count = 0;
+  glGetIntegerv(GL_NUM_EXTENSIONS, &count);
+  for (GLint i = 0; i < count; ++i) {
+    const auto* extension =
+        reinterpret_cast<const char*>(glGetStringi(GL_EXTENSIONS, static_cast<GLuint>(i)));
+    if (extension != nullptr && std::string(extension) == name) return true;
+  }
+  return false;
+}
+
+// Shelf packing of tiles in request order into an atlas about as wide as it is high.
+std::vector<cv::Rect> pack_tiles(const std::vector<cv::Size>& sizes, int max_size,
+                                 cv::Size* atlas) {
+  double area = 0;
+  int widest = 1;
+  for (const auto& size : sizes) {
+    area += static_cast<double>(size.width) * size.height;
+    widest = std::max(widest, size.width);
+  }
+  const int width =
+      std::min(max_size, std::max(widest, static_cast<int>(std::ceil(std::sqrt(area) * 1.15))));
+  std::vector<cv::Rect> rects;
+  rects.reserve(sizes.size());
+  int x = 0, y = 0, shelf_height = 0;
+  for (const auto& size : sizes) {
+    if (x + size.width > width) {
+      x = 0;
+      y += shelf_height;
+      shelf_height = 0;
+    }
+    rects.emplace_back(x, y, size.width, size.height);
+    x += size.width;
+    shelf_height = std::max(shelf_height, size.height);
+  }
+  *atlas = cv::Size(std::max(width, 1), std::max(y + shelf_height, 1));
+  return rects;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// GpuMesh
+
+struct GpuMesh::State {
+  gl::VertexArray vertex_array;
+  gl::Buffer vertices;
+  gl::Buffer indices;
+  GLsizei index_count = 0;
+  std::size_t triangle_count = 0;
+  Eigen::AlignedBox3f bounds;
+};
+
+GpuMesh::GpuMesh() : state_(std::make_unique<State>()) {}
+GpuMesh::GpuMesh(GpuMesh&&) noexcept = default;
+GpuMesh& GpuMesh::operator=(GpuMesh&&) noexcept = default;
+GpuMesh::~GpuMesh() = default;
+std::size_t GpuMesh::triangle_count() const { return state_ ? state_->triangle_count : 0; }
+const Eigen::AlignedBox3f& GpuMesh::bounds() const { return state_->bounds; }
+
+GpuMesh GpuMesh::upload(const Mesh& mesh) {
+  if (glGetString(GL_VERSION) == nullptr) {
+    throw RenderError("GpuMesh::upload needs a current GL context (create an EglContext)");
+  }
+  if (mesh.triangles.empty()) throw std::invalid_argument("GpuMesh::upload: mesh has no triangles");
+  if (mesh.triangles.size() * 3 > static_cast<std::size_t>(std::numeric_limits<GLsizei>::max())) {
+    throw std::invalid_argument("GpuMesh::upload: mesh too large");
+  }
+  for (const auto& t : mesh.triangles) {
+    for (const auto index : t) {
+      if (index >= mesh.positions.size()) {
+        throw std::invalid_argument("GpuMesh::upload: triangle index " + std::to_string(index) +
+                                    " out of range (" + std::to_string(mesh.positions.size()) +
+                                    " vertices)");
+      }
+    }
+  }
+  GpuMesh gpu;
+  State& state = *gpu.state_;
+  state.bounds = mesh.bounds();
+  state.triangle_count = mesh.triangles.size();
+  state.index_count = static_cast<GLsizei>(mesh.triangles.size() * 3);
+  state.vertex_array = gl::make_vertex_array();
+  state.vertices = gl::make_buffer();
+  state.indices = gl::make_buffer();
+  glBindVertexArray(state.vertex_array.get());
+  glBindBuffer(GL_ARRAY_BUFFER, state.vertices.get());
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
+  glBufferData(GL_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(mesh.positions.size() * sizeof(Eigen::Vector3f)),
+               mesh.positions.data(), GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Eigen::Vector3f), nullptr);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, state.indices.get());
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(mesh.triangles.size() * sizeof(mesh.triangles[0])),
+               mesh.triangles.data(), GL_STATIC_DRAW);
+  glBindVertexArray(0);
+  check_gl("GpuMesh::upload");
+  return gpu;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Renderer
+
+struct Renderer::State {
+  bool zero_to_one_clip = false;  // glClipControl available: reversed Z in [0, 1]
+  bool coverage_supported = false;
+  GLint max_size = 0;
+  Program depth_label;
+  Program coverage;
+
+  // The render target, grown on demand: R32F linear depth, R32UI labels, 32-bit float depth.
+  gl::Framebuffer framebuffer;
+  gl::Renderbuffer depth_colour, label_colour, depth_buffer;
+  int capacity_width = 0, capacity_height = 0;
+
+  gl::Texture coverage_image;  // r32ui 2D array, one bit per instance
+  int coverage_width = 0, coverage_height = 0, coverage_layers = 0;
+
+  void ensure_target(int width, int height) {
+    if (width > max_size || height > max_size) {
+      throw RenderError("render target " + std::to_string(width) + "x" + std::to_string(height) +
+                        " exceeds the GL limit of " + std::to_string(max_size));
+    }
+    if (width <= capacity_width && height <= capacity_height) return;
+    capacity_width = std::max(width, capacity_width);
+    capacity_height = std::max(height, capacity_height);
+    framebuffer = gl::make_framebuffer();
+    depth_colour = gl::make_renderbuffer();
+    label_colour = gl::make_renderbuffer();
+    depth_buffer = gl::make_renderbuffer();
+    const std::pair<gl::Renderbuffer*, GLenum> attachments[] = {
+        {&depth_colour, GL_R32F},
+        {&label_colour, GL_R32UI},
+        {&depth_buffer, GL_DEPTH_COMPONENT32F}};
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer.get());
+    for (const auto& [renderbuffer, format] : attachments) {
+      glBindRenderbuffer(GL_RENDERBUFFER, renderbuffer->get());
+      glRenderbufferStorage(GL_RENDERBUFFER, format, capacity_width, capacity_height);
+    }
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER,
+                              depth_colour.get());
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, GL_RENDERBUFFER,
+                              label_colour.get());
+    glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
+                              depth_buffer.get());
+    const GLenum buffers[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glDrawBuffers(2, buffers);
+    const GLenum status = glCheckFramebufferStatus(GL_FRAMEBUFFER);
+    if (status != GL_FRAMEBUFFER_COMPLETE) {
+      throw RenderError("framebuffer incomplete (status 0x" + std::to_string(status) + ")");
+    }
+    check_gl("render target allocation");
+  }
+
+  // Binds the target and clears [0, width) x [0, height) to background.
+  void begin(int width, int height) {
+    ensure_target(width, height);
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer.get());
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(0, 0, width, height);
+    glViewport(0, 0, width, height);
+    const GLfloat zero_depth[] = {0, 0, 0, 0};
+    const GLuint zero_label[] = {0, 0, 0, 0};
+    const GLfloat far_depth = 0;  // reversed Z
+    glClearBufferfv(GL_COLOR, 0, zero_depth);
+    glClearBufferuiv(GL_COLOR, 1, zero_label);
+    glClearBufferfv(GL_DEPTH, 0, &far_depth);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_GREATER);
+    glDepthMask(GL_TRUE);
+    glDisable(GL_CULL_FACE);  // the y-down projection flips winding
+  }
+
+  void set_projection(const Program& program, const Intrinsics& intrinsics) const {
+    const Matrix4fColumnMajor projection = projection_matrix(intrinsics, zero_to_one_clip);
+    glUniformMatrix4fv(program.projection, 1, GL_FALSE, projection.data());
+  }
+
+  // Draws one instance with `program` bound; `bound_mesh` avoids rebinding the same VAO.
+  static void draw(const Program& program, const Instance& instance, std::uint32_t label,
+                   const GpuMesh::State** bound_mesh) {
+    const Matrix4fColumnMajor model_view = instance.model_to_camera.matrix().cast<float>();
+    glUniformMatrix4fv(program.model_view, 1, GL_FALSE, model_view.data());
+    glUniform1ui(program.label, label);
+    const GpuMesh::State* mesh = instance.mesh->state_.get();
+    if (mesh != *bound_mesh) {
+      glBindVertexArray(mesh->vertex_array.get());
+      *bound_mesh = mesh;
+    }
+    glDrawElements(GL_TRIANGLES, mesh->index_count, GL_UNSIGNED_INT, nullptr);
+  }
+
+  DepthLabelImage read(int x, int y, int width, int height) const {
+    DepthLabelImage image;
+    image.depth.create(height, width, CV_32F);
+    image.labels.create(height, width, CV_32S);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glReadPixels(x, y, width, height, GL_RED, GL_FLOAT, image.depth.data);
+    glReadBuffer(GL_COLOR_ATTACHMENT1);
+    glReadPixels(x, y, width, height, GL_RED_INTEGER, GL_UNSIGNED_INT, image.labels.data);
+    check_gl("readback");
+    return image;
+  }
+};
+
+namespace {
+
+void check_instances(const std::vector<Instance>& instances) {
+  for (std::size_t i = 0; i < instances.size(); ++i) {
+    if (instances[i].mesh == nullptr) {
+      throw std::invalid_argument("instance " + std::to_string(i) + " has no mesh");
+    }
+    if (!instances[i].model_to_camera.matrix().allFinite()) {
+      throw std::invalid_argument("instance " + std::to_string(i) + " has a non-finite pose");
+    }
+  }
+}
+
+}  // namespace
+
+Renderer::Renderer(const EglContext& context) : state_(std::make_unique<State>()) {
+  context.make_current();
+  GLint major = 0, minor = 0;
+  glGetIntegerv(GL_MAJOR_VERSION, &major);
+  glGetIntegerv(GL_MINOR_VERSION, &minor);
+  const int version = major * 10 + minor;
+  state_->zero_to_one_clip = version >= 45 || has_gl_extension("GL_ARB_clip_control");
+  state_->coverage_supported = version >= 45;
+  glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &state_->max_size);
+  if (state_->zero_to_one_clip) glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  state_->depth_label = link(kVertexShader, kDepthLabelFragmentShader);
+  if (state_->coverage_supported) state_->coverage = link(kVertexShader, kCoverageFragmentShader);
+  check_gl("Renderer setup");
+}
+
+Renderer::Renderer(Renderer&&) noexcept = default;
+Renderer& Renderer::operator=(Renderer&&) noexcept = default;
+Renderer::~Renderer() = default;
+
+DepthLabelImage Renderer::render(const Intrinsics& intrinsics,
+                                 const std::vector<Instance>& instances) {
+  intrinsics.validate();
+  check_instances(instances);
+  State& state = *state_;
+  state.begin(intrinsics.width, intrinsics.height);
+  glUseProgram(state.depth_label.program.get());
+  state.set_projection(state.depth_label, intrinsics);
+  const GpuMesh::State* bound = nullptr;
+  for (const auto& instance : instances) {
+    State::draw(state.depth_label, instance, instance.label, &bound);
+  }
+  return state.read(0, 0, intrinsics.width, intrinsics.height);
+}
+
+TileAtlas Renderer::render_tiles(const std::vector<TileRequest>& requests) {
+  std::vector<cv::Size> sizes;
+  sizes.reserve(requests.size());
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    requests[i].intrinsics.validate();
+    if (requests[i].instance.mesh == nullptr) {
+      throw std::invalid_argument("tile request " + std::to_string(i) + " has no mesh");
+    }
+    sizes.emplace_back(requests[i].intrinsics.width, requests[i].intrinsics.height);
+  }
+  State& state = *state_;
+  cv::Size atlas_size;
+  TileAtlas result;
+  result.rects = pack_tiles(sizes, state.max_size, &atlas_size);
+  state.begin(atlas_size.width, atlas_size.height);
+  const Program& program = state.depth_label;
+  glUseProgram(program.program.get());
+  const GpuMesh::State* bound = nullptr;
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    const cv::Rect& rect = result.rects[i];
+    glViewport(rect.x, rect.y, rect.width, rect.height);
+    glScissor(rect.x, rect.y, rect.width, rect.height);
+    state.set_projection(program, requests[i].intrinsics);
+    State::draw(program, requests[i].instance, requests[i].instance.label, &bound);
+  }
+  result.atlas = state.read(0, 0, atlas_size.width, atlas_size.height);
+  return result;
+}
+
+cv::Rect Renderer::projected_rect(const Intrinsics& intrinsics, const Instance& instance) {
+  const cv::Rect whole(0, 0, intrinsics.width, intrinsics.height);
+  const Eigen::AlignedBox3f& box = instance.mesh->bounds();
+  const double shift = pixel_shift(intrinsics.pixel_center);
+  double min_x = INFINITY, min_y = INFINITY, max_x = -INFINITY, max_y = -INFINITY;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d p =
+        instance.model_to_camera *
+        box.corner(static_cast<Eigen::AlignedBox3f::CornerType>(corner)).cast<double>();
+    if (!(p.z() >= intrinsics.near_m)) return whole;  // the projection is unbounded
+    const double x = intrinsics.fx * p.x() / p.z() + intrinsics.cx + shift;
+    const double y = intrinsics.fy * p.y() / p.z() + intrinsics.cy + shift;
+    min_x = std::min(min_x, x);
+    max_x = std::max(max_x, x);
+    min_y = std::min(min_y, y);
+    max_y = std::max(max_y, y);
+  }
+  // Pixel u covers window [u, u + 1); one pixel of margin against rounding.
+  const auto clamp = [](double value, int high) {
+    return static_cast<int>(std::clamp(value, -1.0, static_cast<double>(high) + 1.0));
+  };
+  const int x0 = clamp(std::floor(min_x) - 1, intrinsics.width);
+  const int y0 = clamp(std::floor(min_y) - 1, intrinsics.height);
+  const int x1 = clamp(std::ceil(max_x) + 1, intrinsics.width);
+  const int y1 = clamp(std::ceil(max_y) + 1, intrinsics.height);
+  return cv::Rect(x0, y0, std::max(0, x1 - x0), std::max(0, y1 - y0)) & whole;
+}
+
+void Renderer::render_each_alone(const Intrinsics& intrinsics,
+                                 const std::vector<Instance>& instances,
+                                 const std::function<void(const AloneView&)>& visit) {
+  intrinsics.validate();
+  check_instances(instances);
+  std::vector<TileRequest> requests;
+  std::vector<cv::Rect> rects(instances.size());
+  std::vector<int> tile_of(instances.size(), -1);
+  for (std::size_t i = 0; i < instances.size(); ++i) {
+    rects[i] = projected_rect(intrinsics, instances[i]);
+    if (rects[i].empty()) continue;
+    tile_of[i] = static_cast<int>(requests.size());
+    requests.push_back(
+        {intrinsics.crop(rects[i].x, rects[i].y, rects[i].width, rects[i].height), instances[i]});
+  }
+  const TileAtlas atlas = requests.empty() ? TileAtlas{} : render_tiles(requests);
+  for (std::size_t i = 0; i < instances.size(); ++i) {
+    AloneView view;
+    view.index = i;
+    view.rect = rects[i];
+    view.depth =
+        tile_of[i] >= 0 ? atlas.depth(static_cast<std::size_t>(tile_of[i])) : cv::Mat(0, 0, CV_32F);
+    visit(view);
+  }
+}
+
+namespace {
+
+// Running bounding rectangle of pixel coordinates.
+struct PixelBounds {
+  int min_x = std::numeric_limits<int>::max(), min_y = std::numeric_limits<int>::max();
+  int max_x = std::numeric_limits<int>::min(), max_y = std::numeric_limits<int>::min();
+  void add(int x, int y) {
+    min_x = std::min(min_x, x);
+    max_x = std::max(max_x, x);
+    min_y = std::min(min_y, y);
+    max_y = std::max(max_y, y);
+  }
+  cv::Rect rect(int offset_x, int offset_y) const {
+    if (max_x < min_x) return {};
+    return {min_x + offset_x, min_y + offset_y, max_x - min_x + 1, max_y - min_y + 1};
+  }
+};
+
+// Counts from a per-pixel coverage bit mask over `region` (layers of 32 instances,
+// `coverage[(layer * rows + y) * cols + x]`) and the front labels (instance index + 1) of the
+// image window `image_in_region`. Output rects are in image coordinates.
+std::vector<InstanceCounts> count_from_masks(const std::vector<std::uint32_t>& coverage, int layers,
+                                             cv::Size region, const cv::Mat& front_labels,
+                                             cv::Rect image_in_region, std::size_t instances) {
+  std::vector<InstanceCounts> counts(instances);
+  std::vector<PixelBounds> silhouette(instances), visible(instances), canvas(instances);
+  const std::size_t plane = static_cast<std::size_t>(region.width) * region.height;
+  for (int layer = 0; layer < layers; ++layer) {
+    const std::uint32_t* bits = coverage.data() + plane * layer;
+    for (int y = 0; y < region.height; ++y) {
+      const bool row_in_image = y >= image_in_region.y && y < image_in_region.br().y;
+      const std::uint32_t* row = bits + static_cast<std::size_t>(y) * region.width;
+      for (int x = 0; x < region.width; ++x) {
+        std::uint32_t mask = row[x];
+        if (mask == 0) continue;
+        const bool in_image = row_in_image && x >= image_in_region.x && x < image_in_region.br().x;
+        while (mask != 0) {
+          const int bit = __builtin_ctz(mask);
+          mask &= mask - 1;
+          const std::size_t i = static_cast<std::size_t>(layer) * 32 + bit;
+          ++counts[i].canvas_silhouette_px;
+          canvas[i].add(x, y);
+          if (in_image) {
+            ++counts[i].silhouette_px;
+            silhouette[i].add(x, y);
+          }
+        }
+      }
+    }
+  }
+  for (int y = 0; y < front_labels.rows; ++y) {
+    const auto* row = front_labels.ptr<std::int32_t>(y);
+    for (int x = 0; x < front_labels.cols; ++x) {
+      if (row[x] <= 0) continue;
+      const auto i = static_cast<std::size_t>(row[x] - 1);
+      ++counts[i].visible_px;
+      visible[i].add(x, y);
+    }
+  }
+  for (std::size_t i = 0; i < instances; ++i) {
+    counts[i].silhouette_bbox = silhouette[i].rect(-image_in_region.x, -image_in_region.y);
+    counts[i].canvas_silhouette_bbox = canvas[i].rect(-image_in_region.x, -image_in_region.y);
+    counts[i].visible_bbox = visible[i].rect(0, 0);
+  }
+  return counts;
+}
+
+}  // namespace
+
+std::vector<InstanceCounts> Renderer::count_visibility(const Intrinsics& intrinsics,
+                                                       const std::vector<Instance>& instances,
+                                                       const CountOptions& options) {
+  intrinsics.validate();
+  check_instances(instances);
+  if (options.canvas_factor < 1 || options.canvas_factor % 2 == 0) {
+    throw std::invalid_argument("CountOptions::canvas_factor must be odd and >= 1, got " +
+                                std::to_string(options.canvas_factor));
+  }
+  if (instances.size() >= static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max())) {
+    throw std::invalid_argument("count_visibility: too many instances");
+  }
+  if (instances.empty()) return {};
+  State& state = *state_;
+
+  // Render only the part of the canvas that the image and the objects' projections reach.
+  const Intrinsics canvas = intrinsics.enlarged(options.canvas_factor);
+  const int margin = (options.canvas_factor - 1) / 2;
+  const cv::Rect image_on_canvas(margin * intrinsics.width, margin * intrinsics.height,
+                                 intrinsics.width, intrinsics.height);
+  cv::Rect region = image_on_canvas;
+  if (options.canvas_factor > 1) {
+    for (const auto& instance : instances) region |= projected_rect(canvas, instance);
+  }
+  const Intrinsics target = canvas.crop(region.x, region.y, region.width, region.height);
+  const cv::Rect image_in_region = image_on_canvas - region.tl();
+  const int layers = static_cast<int>((instances.size() + 31) / 32);
+  std::vector<std::uint32_t> coverage(static_cast<std::size_t>(region.width) * region.height *
+                                      layers);
+
+  if (!state.coverage_supported) {
+    // Pre-4.5 fallback: each object alone, then the scene for the front labels.
+    for (std::size_t i = 0; i < instances.size(); ++i) {
+      const DepthLabelImage alone = render(target, {instances[i]});
+      std::uint32_t* plane =
+          coverage.data() + static_cast<std::size_t>(region.width) * region.height * (i / 32);
+      for (int y = 0; y < region.height; ++y) {
+        const float* depth = alone.depth.ptr<float>(y);
+        for (int x = 0; x < region.width; ++x) {
+          if (depth[x] > 0) plane[static_cast<std::size_t>(y) * region.width + x] |= 1u << (i % 32);
+        }
+      }
+    }
+    std::vector<Instance> indexed = instances;
+    for (std::size_t i = 0; i < indexed.size(); ++i) {
+      indexed[i].label = static_cast<std::uint32_t>(i + 1);
+    }
+    const DepthLabelImage scene = render(target, indexed);
+    return count_from_masks(coverage, layers, region.size(), scene.labels(image_in_region),
+                            image_in_region, instances.size());
+  }
+
+  if (region.width > state.coverage_width || region.height > state.coverage_height ||
+      layers > state.coverage_layers) {
+    state.coverage_width = std::max(region.width, state.coverage_width);
+    state.coverage_height = std::max(region.height, state.coverage_height);
+    state.coverage_layers = std::max(layers, state.coverage_layers);
+    state.coverage_image = gl::make_texture();
+    glBindTexture(GL_TEXTURE_2D_ARRAY, state.coverage_image.get());
+    glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_R32UI, state.coverage_width, state.coverage_height,
+                   state.coverage_layers);
+    check_gl("coverage image allocation");
+  }
+  const GLuint zero = 0;
+  glClearTexSubImage(state.coverage_image.get(), 0, 0, 0, 0, region.width, region.height, layers,
+                     GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+  glBindImageTexture(0, state.coverage_image.get(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_R32UI);
+
+  state.begin(region.width, region.height);
+  const Program& program = state.coverage;
+  glUseProgram(program.program.get());
+  state.set_projection(program, target);
+  const GpuMesh::State* bound = nullptr;
+  for (std::size_t i = 0; i < instances.size(); ++i) {
+    glUniform1i(program.coverage_layer, static_cast<GLint>(i / 32));
+    glUniform1ui(program.coverage_bit, 1u << (i % 32));
+    State::draw(program, instances[i], static_cast<std::uint32_t>(i + 1), &bound);
+  }
+  glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
+  const DepthLabelImage front = state.read(image_in_region.x, image_in_region.y,
+                                           image_in_region.width, image_in_region.height);
+  glGetTextureSubImage(state.coverage_image.get(), 0, 0, 0, 0, region.width, region.height, layers,
+                       GL_RED_INTEGER, GL_UNSIGNED_INT,
+                       static_cast<GLsizei>(coverage.size() * sizeof(std::uint32_t)),
+                       coverage.data());
+  check_gl("count_visibility");
+  return count_from_masks(coverage, layers, region.size(), front.labels, image_in_region,
+                          instances.size());
+}
+
+}  // namespace clutterscope::render
