@@ -21,6 +21,8 @@ int run_cli(int argc, char** argv) {
   app.require_subcommand(1);
   int exit_code = 0;
   add_render_command(app, &exit_code);
+  add_visibility_command(app, &exit_code);
+  add_bench_visibility_command(app, &exit_code);
 
   try {
     app.parse(argc, argv);

@@ -9,5 +9,7 @@
 namespace clutterscope::tools {
 
 void add_render_command(CLI::App& app, int* exit_code);
+void add_visibility_command(CLI::App& app, int* exit_code);
+void add_bench_visibility_command(CLI::App& app, int* exit_code);
 
 }  // namespace clutterscope::tools
