@@ -9,7 +9,9 @@
 namespace clutterscope::tools {
 
 void add_render_command(CLI::App& app, int* exit_code);
+void add_merge_command(CLI::App& app, int* exit_code);
 void add_visibility_command(CLI::App& app, int* exit_code);
 void add_bench_visibility_command(CLI::App& app, int* exit_code);
+void add_notebook_command(CLI::App& app, int* exit_code);
 
 }  // namespace clutterscope::tools

@@ -108,9 +108,9 @@ class SummaryBuilder {
 struct BatchOutputSpec {
   std::string command;  // e.g. "visibility"; also recorded in the fingerprint
   std::vector<TableSpec> tables;
-  // Creates the builder; `fingerprint` is the job's fingerprint (options used), `out_dir` the
-  // folder the final files go to.
-  std::function<std::unique_ptr<SummaryBuilder>(const nlohmann::json& fingerprint,
+  // Creates the builder; `options` is the job's BatchJob::fingerprint as stored in OUT (the
+  // options used, for summary.json), `out_dir` the folder the final files go to.
+  std::function<std::unique_ptr<SummaryBuilder>(const nlohmann::json& options,
                                                 const std::filesystem::path& out_dir)>
       make_summary;
 };

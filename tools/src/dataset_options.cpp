@@ -1,0 +1,128 @@
+#include "dataset_options.hpp"
+
+#include <algorithm>
+#include <thread>
+
+namespace clutterscope::tools {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Ranges wider than this are a typo, not a selection.
+constexpr long kMaxRangeSpan = 10'000'000;
+
+int parse_id(const std::string& text, const std::string& option, const std::string& whole) {
+  if (text.empty() || text.size() > 9 ||
+      text.find_first_not_of("0123456789") != std::string::npos) {
+    throw UsageError(option + ": '" + text + "' in '" + whole +
+                     "' is not an id (expected non-negative ids and ranges, e.g. 1,2,5-7)");
+  }
+  return std::stoi(text);
+}
+
+// A CLI11 validator running `check`, so bad values are reported while parsing (exit 2).
+template <class Check>
+CLI::Validator validator(const std::string& name, Check check) {
+  return CLI::Validator(
+      [check](std::string& value) -> std::string {
+        try {
+          check(value);
+        } catch (const UsageError& error) {
+          return error.what();
+        }
+        return "";
+      },
+      "", name);
+}
+
+}  // namespace
+
+std::vector<int> parse_id_list(const std::string& text, const std::string& option) {
+  std::vector<int> ids;
+  if (text.empty()) return ids;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const std::string token = text.substr(start, comma - start);
+    const std::size_t dash = token.find('-');
+    if (dash == std::string::npos) {
+      ids.push_back(parse_id(token, option, text));
+    } else {
+      const int first = parse_id(token.substr(0, dash), option, text);
+      const int last = parse_id(token.substr(dash + 1), option, text);
+      if (last < first || static_cast<long>(last) - first > kMaxRangeSpan) {
+        throw UsageError(option + ": range '" + token + "' must be FIRST-LAST with FIRST <= LAST" +
+                         " and at most " + std::to_string(kMaxRangeSpan) + " ids");
+      }
+      for (int id = first; id <= last; ++id) ids.push_back(id);
+    }
+    start = comma + 1;
+  }
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  return ids;
+}
+
+void add_dataset_options(CLI::App& command, DatasetOptions* options) {
+  options->jobs = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  command.add_option("DATASET", options->dataset, "BOP dataset folder (holds models/ and splits)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  command.add_option("--split", options->split, "split folder to process (test, train_pbr, ...)")
+      ->capture_default_str();
+  command
+      .add_option("--scenes", options->scenes,
+                  "scene ids to process, e.g. 1,2,5-7 (default: all scenes of the split)")
+      ->check(validator("IDS", [](const std::string& v) { parse_id_list(v, "--scenes"); }));
+  command
+      .add_option("--images", options->images,
+                  "image ids to process within each scene, e.g. 0-99 (default: all)")
+      ->check(validator("IDS", [](const std::string& v) { parse_id_list(v, "--images"); }));
+  command
+      .add_option("--out", options->out,
+                  "output folder; re-running into it resumes, a different job is refused")
+      ->required();
+  command.add_option("--jobs,-j", options->jobs, "worker threads (one render context each)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 1024));
+  command
+      .add_option("--shard", options->shard,
+                  "process only shard I of N (image k of the sorted list goes to shard k mod N); "
+                  "combine shard folders with `clutterscope merge`")
+      ->check(validator("I/N", [](const std::string& v) { parse_shard(v); }));
+  command.add_flag("--keep-going", options->keep_going,
+                   "record images with bad data in summary.json and continue (exit code 1)");
+  command.add_flag("--quiet,-q", options->quiet, "no progress output");
+}
+
+datasets::DatasetSelection selection_of(const DatasetOptions& options) {
+  datasets::DatasetSelection selection;
+  selection.splits = {options.split};
+  selection.scene_ids = parse_id_list(options.scenes, "--scenes");
+  selection.image_ids = parse_id_list(options.images, "--images");
+  return selection;
+}
+
+BatchOptions batch_options_of(const DatasetOptions& options, const std::string& label) {
+  BatchOptions batch;
+  batch.out_dir = options.out;
+  batch.jobs = options.jobs;
+  if (!options.shard.empty()) batch.shard = parse_shard(options.shard);
+  batch.keep_going = options.keep_going;
+  batch.quiet = options.quiet;
+  batch.progress_label = label;
+  return batch;
+}
+
+nlohmann::json dataset_fingerprint(const DatasetOptions& options) {
+  std::error_code error;
+  fs::path dataset = fs::weakly_canonical(fs::absolute(options.dataset), error);
+  if (error) dataset = fs::absolute(options.dataset).lexically_normal();
+  return {{"dataset", dataset.string()},
+          {"split", options.split},
+          {"scenes", parse_id_list(options.scenes, "--scenes")},
+          {"images", parse_id_list(options.images, "--images")}};
+}
+
+}  // namespace clutterscope::tools
