@@ -75,22 +75,34 @@ Json read_json_file(const fs::path& path, const std::string& where) {
   std::stringstream buffer;
   buffer << stream.rdbuf();
   const std::string text = buffer.str();
+  size_t error_byte = 0;
+  std::string parser_message;
   try {
     return Json::parse(text);
   } catch (const Json::parse_error& parse_error) {
-    const ParsePlace place = place_of(text, parse_error.byte);
-    std::string message = where + "malformed JSON";
-    if (!place.top_key.empty()) message += " in entry \"" + place.top_key + "\"";
-    if (!place.field.empty() && place.field != place.top_key) {
-      message += ", field " + place.field;
+    error_byte = parse_error.byte;
+    parser_message = parse_error.what();
+  } catch (const Json::exception& other) {
+    // e.g. out_of_range.406 "number overflow parsing '1e999'": locate the quoted token.
+    parser_message = other.what();
+    const size_t open = parser_message.find('\'');
+    const size_t close = parser_message.rfind('\'');
+    if (open != std::string::npos && close > open + 1) {
+      const size_t at = text.find(parser_message.substr(open + 1, close - open - 1));
+      if (at != std::string::npos) error_byte = at + 1;
     }
-    const size_t from = parse_error.byte > 16 ? parse_error.byte - 16 : 0;
-    const std::string near = text.substr(from, 32);
-    if (near.find("NaN") != std::string::npos || near.find("Infinity") != std::string::npos) {
-      message += " (NaN/Infinity are not numbers in JSON; the value is not finite)";
-    }
-    throw DatasetError(path, message + ": " + parse_error.what());
   }
+  const ParsePlace place = place_of(text, error_byte);
+  std::string message = where + "malformed JSON";
+  if (!place.top_key.empty()) message += " in entry \"" + place.top_key + "\"";
+  if (!place.field.empty() && place.field != place.top_key) message += ", field " + place.field;
+  const size_t from = error_byte > 16 ? error_byte - 16 : 0;
+  const std::string near = text.substr(std::min(from, text.size()), 32);
+  if (near.find("NaN") != std::string::npos || near.find("Infinity") != std::string::npos ||
+      parser_message.find("overflow") != std::string::npos) {
+    message += " (the value is not finite: NaN/Infinity/overflowing numbers are not JSON numbers)";
+  }
+  throw DatasetError(path, message + ": " + parser_message);
 }
 
 void FieldContext::fail(const std::string& message) const {

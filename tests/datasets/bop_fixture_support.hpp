@@ -141,11 +141,27 @@ inline TinyBopImage tiny_bop_image(int scene_id, int im_id) {
   return image;
 }
 
-inline std::string json_numbers(const double* values, int count) {
+// The shortest decimal text that reads back as `value`, as Python's repr writes it.
+inline std::string shortest(double value) {
+  if (value == std::floor(value) && std::abs(value) < 1e15) {
+    return std::to_string(static_cast<long long>(value));
+  }
+  for (int precision = 1; precision < 17; ++precision) {
+    std::ostringstream text;
+    text.precision(precision);
+    text << value;
+    if (std::stod(text.str()) == value) return text.str();
+  }
   std::ostringstream text;
   text.precision(17);
+  text << value;
+  return text.str();
+}
+
+inline std::string json_numbers(const double* values, int count) {
+  std::ostringstream text;
   text << "[";
-  for (int i = 0; i < count; ++i) text << (i ? ", " : "") << values[i];
+  for (int i = 0; i < count; ++i) text << (i ? ", " : "") << shortest(values[i]);
   text << "]";
   return text.str();
 }
@@ -170,12 +186,11 @@ inline cv::Mat tiny_bop_depth_raw(int width, int height) {
 // models/ with three box PLYs, models_info.json and models_names.json (obj 3 left unnamed).
 inline void write_tiny_bop_models(const fs::path& root) {
   std::ostringstream info;
-  info.precision(17);
   info << "{\n";
   for (int obj_id = 1; obj_id <= 3; ++obj_id) {
     const Eigen::Vector3d size = tiny_bop_box_size_mm(obj_id);
     write_text(root / "models" / ("obj_" + six_digit_id(obj_id) + ".ply"), box_ply_text(size));
-    info << "  \"" << obj_id << "\": {\"diameter\": " << size.norm()
+    info << "  \"" << obj_id << "\": {\"diameter\": " << shortest(size.norm())
          << ", \"min_x\": " << -size.x() / 2 << ", \"min_y\": " << -size.y() / 2
          << ", \"min_z\": " << -size.z() / 2 << ", \"size_x\": " << size.x()
          << ", \"size_y\": " << size.y() << ", \"size_z\": " << size.z() << "}"
@@ -191,7 +206,6 @@ inline void write_tiny_bop_scene(const fs::path& root, const TinyBopOptions& opt
                                  int scene_id) {
   const fs::path dir = root / options.split / six_digit_id(scene_id);
   std::ostringstream camera, gt, graph;
-  camera.precision(17);
   camera << "{\n";
   gt << "{\n";
   graph << "{\n";
@@ -199,7 +213,7 @@ inline void write_tiny_bop_scene(const fs::path& root, const TinyBopOptions& opt
     const TinyBopImage image = tiny_bop_image(scene_id, im_id);
     const char* separator = im_id + 1 < options.images_per_scene ? ",\n" : "\n";
     camera << "  \"" << im_id << "\": {\"cam_K\": " << json_row_major(image.K)
-           << ", \"depth_scale\": " << options.depth_scale << "}" << separator;
+           << ", \"depth_scale\": " << shortest(options.depth_scale) << "}" << separator;
     gt << "  \"" << im_id << "\": [";
     for (size_t k = 0; k < image.gt.size(); ++k) {
       gt << (k ? ", " : "") << "{\"cam_R_m2c\": " << json_row_major(image.gt[k].R)
