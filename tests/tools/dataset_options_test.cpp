@@ -1,0 +1,111 @@
+#include "../../tools/src/dataset_options.hpp"
+
+#include <gtest/gtest.h>
+
+#include "../../tools/src/progress.hpp"
+#include "fake_batch_support.hpp"
+
+namespace clutterscope::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Parses `arguments` (after the program name) into options through a real CLI11 subcommand.
+void parse(const std::vector<std::string>& arguments, DatasetOptions* options) {
+  CLI::App app;
+  CLI::App* command = app.add_subcommand("cmd");
+  add_dataset_options(*command, options);
+  std::vector<std::string> reversed = arguments;
+  reversed.insert(reversed.begin(), "cmd");
+  std::reverse(reversed.begin(), reversed.end());
+  app.parse(reversed);
+}
+
+TEST(DatasetOptions, ParseIdList) {
+  EXPECT_EQ(parse_id_list("1,2,5-7", "--scenes"), (std::vector<int>{1, 2, 5, 6, 7}));
+  EXPECT_EQ(parse_id_list("7,1,1,0", "--scenes"), (std::vector<int>{0, 1, 7}));
+  EXPECT_EQ(parse_id_list("3-3", "--scenes"), (std::vector<int>{3}));
+  EXPECT_TRUE(parse_id_list("", "--scenes").empty());
+  for (const char* bad : {"a", "1,,2", "5-3", "-1", "1-", " 1", "1,", "1-2-3", "99999999999"}) {
+    try {
+      parse_id_list(bad, "--images");
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const UsageError& error) {
+      EXPECT_NE(std::string(error.what()).find("--images"), std::string::npos) << error.what();
+    }
+  }
+}
+
+TEST(DatasetOptions, DefaultsAndValues) {
+  const fs::path dataset = testing::fresh_dir("options_dataset");
+  DatasetOptions options;
+  parse({dataset.string(), "--out", "o"}, &options);
+  EXPECT_EQ(options.split, "test");
+  EXPECT_GE(options.jobs, 1);
+  EXPECT_FALSE(options.keep_going);
+  const BatchOptions defaults = batch_options_of(options, "x");
+  EXPECT_FALSE(defaults.shard.has_value());
+
+  parse({dataset.string(), "--out", "o", "--split", "val", "--scenes", "2,4-5", "--images", "0-2",
+         "--jobs", "3", "--shard", "1/4", "--keep-going", "--quiet"},
+        &options);
+  const datasets::DatasetSelection selection = selection_of(options);
+  EXPECT_EQ(selection.splits, std::vector<std::string>{"val"});
+  EXPECT_EQ(selection.scene_ids, (std::vector<int>{2, 4, 5}));
+  EXPECT_EQ(selection.image_ids, (std::vector<int>{0, 1, 2}));
+  const BatchOptions batch = batch_options_of(options, "label");
+  EXPECT_EQ(batch.out_dir, fs::path("o"));
+  EXPECT_EQ(batch.jobs, 3);
+  ASSERT_TRUE(batch.shard.has_value());
+  EXPECT_EQ(batch.shard->index, 1);
+  EXPECT_EQ(batch.shard->count, 4);
+  EXPECT_TRUE(batch.keep_going);
+  EXPECT_TRUE(batch.quiet);
+  EXPECT_EQ(batch.progress_label, "label");
+
+  const nlohmann::json fingerprint = dataset_fingerprint(options);
+  EXPECT_TRUE(fs::path(fingerprint["dataset"].get<std::string>()).is_absolute());
+  EXPECT_EQ(fingerprint["scenes"], nlohmann::json({2, 4, 5}));
+  EXPECT_EQ(fingerprint["split"], "val");
+}
+
+TEST(DatasetOptions, BadValuesAreUsageErrorsWhileParsing) {
+  const std::string dataset = testing::fresh_dir("options_bad").string();
+  const std::vector<std::vector<std::string>> bad = {
+      {dataset},                                   // no --out
+      {dataset + "/missing", "--out", "o"},        // dataset folder does not exist
+      {dataset, "--out", "o", "--jobs", "0"},      // jobs < 1
+      {dataset, "--out", "o", "--shard", "2/2"},   // index out of range
+      {dataset, "--out", "o", "--shard", "half"},  // not I/N
+      {dataset, "--out", "o", "--scenes", "1,x"},  // not ids
+      {dataset, "--out", "o", "--images", "9-2"},  // empty range
+      {dataset, "--out", "o", "--unknown-option"},
+  };
+  for (const auto& arguments : bad) {
+    DatasetOptions options;
+    EXPECT_THROW(parse(arguments, &options), CLI::ParseError) << arguments.back();
+  }
+}
+
+TEST(DatasetOptions, BatchOptionsValidation) {
+  BatchOptions options;
+  std::string why;
+  EXPECT_FALSE(options.IsValid(&why));
+  EXPECT_EQ(why, "--out is required");
+  options.out_dir = "o";
+  options.jobs = 0;
+  EXPECT_FALSE(options.IsValid(&why));
+  EXPECT_EQ(why, "--jobs must be >= 1, got 0");
+  options.jobs = 2;
+  EXPECT_TRUE(options.IsValid(&why));
+}
+
+TEST(Progress, FormatsEta) {
+  EXPECT_EQ(Progress::format_duration(0), "0:00");
+  EXPECT_EQ(Progress::format_duration(249), "4:09");
+  EXPECT_EQ(Progress::format_duration(3909), "1:05:09");
+  EXPECT_EQ(Progress::format_duration(-1), "--:--");
+}
+
+}  // namespace
+}  // namespace clutterscope::tools
