@@ -20,9 +20,11 @@ void add_merge_command(CLI::App& app, int* exit_code) {
       "files are byte-identical to a single unsharded run. The folders must hold the same job "
       "(same command, dataset, options and tool version); missing images are reported.");
   command->add_option("DIR", arguments->inputs, "shard output folders (each holds .batch/)")
+      ->type_name("")
       ->required()
-      ->check(CLI::ExistingDirectory);
+      ->check(CLI::Validator(CLI::ExistingDirectory).description(""));
   command->add_option("--out", arguments->out, "merged output folder (may be one of the DIRs)")
+      ->type_name("DIR")
       ->required();
   command->add_flag("--quiet,-q", arguments->quiet, "no summary line");
   command->callback([arguments, exit_code] {

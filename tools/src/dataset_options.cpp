@@ -67,30 +67,37 @@ std::vector<int> parse_id_list(const std::string& text, const std::string& optio
 void add_dataset_options(CLI::App& command, DatasetOptions* options) {
   options->jobs = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   command.add_option("DATASET", options->dataset, "BOP dataset folder (holds models/ and splits)")
+      ->type_name("")
       ->required()
-      ->check(CLI::ExistingDirectory);
+      ->check(CLI::Validator(CLI::ExistingDirectory).description(""));
   command.add_option("--split", options->split, "split folder to process (test, train_pbr, ...)")
+      ->type_name("NAME")
       ->capture_default_str();
   command
       .add_option("--scenes", options->scenes,
                   "scene ids to process, e.g. 1,2,5-7 (default: all scenes of the split)")
-      ->check(validator("IDS", [](const std::string& v) { parse_id_list(v, "--scenes"); }));
+      ->type_name("IDS")
+      ->check(validator("", [](const std::string& v) { parse_id_list(v, "--scenes"); }));
   command
       .add_option("--images", options->images,
                   "image ids to process within each scene, e.g. 0-99 (default: all)")
-      ->check(validator("IDS", [](const std::string& v) { parse_id_list(v, "--images"); }));
+      ->type_name("IDS")
+      ->check(validator("", [](const std::string& v) { parse_id_list(v, "--images"); }));
   command
       .add_option("--out", options->out,
                   "output folder; re-running into it resumes, a different job is refused")
+      ->type_name("DIR")
       ->required();
   command.add_option("--jobs,-j", options->jobs, "worker threads (one render context each)")
+      ->type_name("N")
       ->capture_default_str()
-      ->check(CLI::Range(1, 1024));
+      ->check(CLI::Range(1, 1024).description(""));
   command
       .add_option("--shard", options->shard,
                   "process only shard I of N (image k of the sorted list goes to shard k mod N); "
                   "combine shard folders with `clutterscope merge`")
-      ->check(validator("I/N", [](const std::string& v) { parse_shard(v); }));
+      ->type_name("I/N")
+      ->check(validator("", [](const std::string& v) { parse_shard(v); }));
   command.add_flag("--keep-going", options->keep_going,
                    "record images with bad data in summary.json and continue (exit code 1)");
   command.add_flag("--quiet,-q", options->quiet, "no progress output");
