@@ -2,7 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include "../../tools/src/progress.hpp"
 #include "fake_batch_support.hpp"
 
 namespace clutterscope::tools {
@@ -98,13 +97,6 @@ TEST(DatasetOptions, BatchOptionsValidation) {
   EXPECT_EQ(why, "--jobs must be >= 1, got 0");
   options.jobs = 2;
   EXPECT_TRUE(options.IsValid(&why));
-}
-
-TEST(Progress, FormatsEta) {
-  EXPECT_EQ(Progress::format_duration(0), "0:00");
-  EXPECT_EQ(Progress::format_duration(249), "4:09");
-  EXPECT_EQ(Progress::format_duration(3909), "1:05:09");
-  EXPECT_EQ(Progress::format_duration(-1), "--:--");
 }
 
 }  // namespace

@@ -101,6 +101,17 @@ class TableWriter {
       streams_.back() << table.header << '\n';
     }
   }
+  TableWriter(const TableWriter&) = delete;
+  TableWriter& operator=(const TableWriter&) = delete;
+  // Tables that were not committed (an exception while assembling) leave no temporary file.
+  ~TableWriter() {
+    if (committed_) return;
+    for (std::size_t t = 0; t < streams_.size(); ++t) {
+      streams_[t].close();
+      std::error_code ignored;
+      fs::remove(paths_[t].first, ignored);
+    }
+  }
   void append(std::size_t table, const std::string& rows) { streams_[table] << rows; }
   void commit() {
     for (std::size_t t = 0; t < streams_.size(); ++t) {
@@ -108,11 +119,13 @@ class TableWriter {
       if (!streams_[t]) throw std::runtime_error("cannot write " + paths_[t].first.string());
       fs::rename(paths_[t].first, paths_[t].second);
     }
+    committed_ = true;
   }
 
  private:
   std::vector<std::pair<fs::path, fs::path>> paths_;  // temporary, final
   std::vector<std::ofstream> streams_;
+  bool committed_ = false;
 };
 
 }  // namespace
