@@ -65,7 +65,7 @@ ParsePlace place_of(const std::string& text, size_t byte) {
 
 }  // namespace
 
-Json read_json_file(const fs::path& path, const std::string& where) {
+Json read_json_file(const fs::path& path, const std::string& where, const char* key_name) {
   std::error_code error;
   if (!fs::is_regular_file(path, error)) {
     throw DatasetError(path, where + "file is missing");
@@ -94,7 +94,7 @@ Json read_json_file(const fs::path& path, const std::string& where) {
   }
   const ParsePlace place = place_of(text, error_byte);
   std::string message = where + "malformed JSON";
-  if (!place.top_key.empty()) message += " in entry \"" + place.top_key + "\"";
+  if (!place.top_key.empty()) message += std::string(" in ") + key_name + " " + place.top_key;
   if (!place.field.empty() && place.field != place.top_key) message += ", field " + place.field;
   const size_t from = error_byte > 16 ? error_byte - 16 : 0;
   const std::string near = text.substr(std::min(from, text.size()), 32);

@@ -16,8 +16,10 @@ namespace clutterscope::datasets::detail {
 using Json = nlohmann::json;
 
 // Reads and parses a JSON file. `where` ("scene 3: " or "") prefixes error messages. A parse
-// error names the parser's message and the top-level key and field it happened in.
-Json read_json_file(const std::filesystem::path& path, const std::string& where);
+// error names the parser's message, the top-level key it happened in ("image 12" when
+// key_name is "image") and the last field name read before it.
+Json read_json_file(const std::filesystem::path& path, const std::string& where,
+                    const char* key_name = "entry");
 
 // Where a field lives: the file and the location prefix ("scene 3, image 12, gt 4: ").
 struct FieldContext {

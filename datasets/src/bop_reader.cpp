@@ -174,7 +174,7 @@ BopDataset BopDataset::open(const fs::path& root, const BopOpenOptions& options)
 
   const fs::path models_dir = root / "models";
   const fs::path info_path = models_dir / "models_info.json";
-  const Json info = detail::read_json_file(info_path, "");
+  const Json info = detail::read_json_file(info_path, "", "obj_id");
   require_object(info, info_path, "", "obj_id");
   for (const auto& item : info.items()) {
     const FieldContext key_context{info_path, ""};
@@ -214,7 +214,7 @@ BopDataset BopDataset::open(const fs::path& root, const BopOpenOptions& options)
 
   const fs::path names_path = models_dir / "models_names.json";
   if (fs::exists(names_path, error)) {
-    const Json names = detail::read_json_file(names_path, "");
+    const Json names = detail::read_json_file(names_path, "", "obj_id");
     require_object(names, names_path, "", "obj_id");
     for (const auto& item : names.items()) {
       const FieldContext context{names_path, ""};
@@ -230,7 +230,7 @@ BopDataset BopDataset::open(const fs::path& root, const BopOpenOptions& options)
 
   const fs::path camera_path = root / "camera.json";
   if (fs::exists(camera_path, error)) {
-    const Json camera = detail::read_json_file(camera_path, "");
+    const Json camera = detail::read_json_file(camera_path, "", "field");
     const FieldContext context{camera_path, ""};
     RootCamera root_camera;
     root_camera.width =
@@ -312,7 +312,7 @@ std::vector<ImageKey> BopDataset::list_images(const DatasetSelection& selection)
       ++scenes_visited;
       last_camera_path = root_ / split / six_digits(scene_id) / "scene_camera.json";
       const std::string where = location(scene_id);
-      const Json camera = detail::read_json_file(last_camera_path, where);
+      const Json camera = detail::read_json_file(last_camera_path, where, "image");
       require_object(camera, last_camera_path, where, "image id");
       for (const int im_id : sorted_ids(camera, last_camera_path, where, "image")) {
         if (!wanted_images.empty() && wanted_images.count(im_id) == 0) continue;
@@ -369,12 +369,12 @@ std::shared_ptr<const BopDataset::SceneFiles> BopDataset::scene(const std::strin
   const fs::path camera_path = files->dir / "scene_camera.json";
   const fs::path gt_path = files->dir / "scene_gt.json";
   const fs::path graph_path = files->dir / "scene_graph.json";
-  files->camera = detail::read_json_file(camera_path, where);
+  files->camera = detail::read_json_file(camera_path, where, "image");
   require_object(files->camera, camera_path, where, "image id");
-  files->gt = detail::read_json_file(gt_path, where);
+  files->gt = detail::read_json_file(gt_path, where, "image");
   require_object(files->gt, gt_path, where, "image id");
   if (fs::exists(graph_path, error)) {
-    files->graph = detail::read_json_file(graph_path, where);
+    files->graph = detail::read_json_file(graph_path, where, "image");
     require_object(*files->graph, graph_path, where, "image id");
   }
   const std::vector<int> ids = sorted_ids(files->camera, camera_path, where, "image");
@@ -519,7 +519,7 @@ SceneView BopDataset::load(const ImageKey& key) const {
 }
 
 void BopDataset::attach_detections(const fs::path& detections_json) {
-  const Json json = detail::read_json_file(detections_json, "");
+  const Json json = detail::read_json_file(detections_json, "", "detection");
   if (!json.is_array()) {
     throw DatasetError(detections_json,
                        std::string("expected a JSON list of detections, got ") + json.type_name());

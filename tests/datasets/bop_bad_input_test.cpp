@@ -80,7 +80,7 @@ TEST_F(BopBadInput, MalformedModelsInfoShowsTheParserMessage) {
   replace_first(dir_.path() / "models" / "models_info.json", "\"size_x\": 50,", "\"size_x\": 50 ");
   expect_mentions(
       dataset_error([&] { BopDataset::open(dir_.path()); }),
-      {"models_info.json", "malformed JSON", "entry \"2\"", "field size_x", "parse error"});
+      {"models_info.json", "malformed JSON", "obj_id 2", "field size_x", "parse error"});
 }
 
 TEST_F(BopBadInput, ModelsInfoFieldMissing) {
@@ -113,7 +113,7 @@ TEST_F(BopBadInput, MalformedSceneGtNamesImageAndField) {
   const size_t end = text.find("770]", image1);
   text.replace(end, 4, "770,]");
   write_text(path, text);
-  expect_mentions(load_error(), {"scene_gt.json", "scene 1", "malformed JSON", "entry \"1\"",
+  expect_mentions(load_error(), {"scene_gt.json", "scene 1", "malformed JSON", "image 1",
                                  "field cam_t_m2c", "parse error at line 3"});
 }
 
@@ -150,12 +150,12 @@ TEST_F(BopBadInput, NaNInRotationAsPythonWritesIt) {
   replace_first(scene_file("scene_gt.json"), kFirstRotation,
                 "\"cam_R_m2c\": [NaN, 0, 0, 0, 1, 0, 0, 0, 1]");
   expect_mentions(load_error(),
-                  {"scene_gt.json", "scene 1", "entry \"0\"", "field cam_R_m2c", "not finite"});
+                  {"scene_gt.json", "scene 1", "image 0", "field cam_R_m2c", "not finite"});
 }
 
 TEST_F(BopBadInput, OverflowingTranslationIsNotFinite) {
   replace_first(scene_file("scene_gt.json"), kCubeTranslation, "\"cam_t_m2c\": [20, 1e999, 770]");
-  expect_mentions(load_error(), {"scene_gt.json", "scene 1", "entry \"0\"", "field cam_t_m2c",
+  expect_mentions(load_error(), {"scene_gt.json", "scene 1", "image 0", "field cam_t_m2c",
                                  "not finite", "1e999"});
 }
 
