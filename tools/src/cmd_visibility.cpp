@@ -210,7 +210,16 @@ class VisibilityWorker {
       }
     }
     if (background.empty()) {
-      background = visibility::depth_background(measured_mm, view.camera.width, view.camera.height);
+      cv::Mat depth = measured_mm;
+      if (depth.empty() && !view.depth_path.empty() && fs::exists(view.depth_path)) {
+        // Rendered mode does not need the measured depth; use it as a backdrop when usable.
+        depth = cv::imread(view.depth_path.string(), cv::IMREAD_UNCHANGED);
+        if (depth.channels() != 1 || depth.cols != view.camera.width ||
+            depth.rows != view.camera.height) {
+          depth.release();
+        }
+      }
+      background = visibility::depth_background(depth, view.camera.width, view.camera.height);
     }
     std::vector<double> fractions;
     for (const visibility::ObjectVisibility& object : result.objects) {

@@ -57,6 +57,7 @@ cv::Mat draw_visibility_overlay(const cv::Mat& background, const ImageMasks& mas
   const int font = cv::FONT_HERSHEY_SIMPLEX;
   const double scale = std::max(0.3, out.cols / 1600.0);
   const int thickness = out.cols >= 1000 ? 2 : 1;
+  std::vector<cv::Rect> placed_labels;
   for (std::size_t i = 0; i < n; ++i) {
     if (masks.silhouette[i].empty()) continue;
     const cv::Mat hidden = (masks.silhouette[i] > 0) & (masks.visible[i] == 0);
@@ -71,20 +72,32 @@ cv::Mat draw_visibility_overlay(const cv::Mat& background, const ImageMasks& mas
     const std::string text = labels[i] + " " + std::to_string(percent) + "%";
     int baseline = 0;
     const cv::Size size = cv::getTextSize(text, font, scale, thickness, &baseline);
-    // Beside the silhouette (right of it, else left), vertically centred, kept in the image.
+    // Beside the silhouette (right of it, else left), vertically centred, kept in the image
+    // and moved down (then up) until it overlaps no label placed before.
     int x = box.x + box.width + 3;
     if (x + size.width > out.cols) x = std::max(0, box.x - size.width - 3);
-    const int y = std::clamp(box.y + box.height / 2 + size.height / 2, size.height,
-                             std::max(size.height, out.rows - baseline));
-    const cv::Scalar color =
-        visibility[i] < 0.30 ? cv::Scalar(0, 0, 255) : cv::Scalar(255, 255, 255);
-    cv::rectangle(out,
-                  cv::Rect(x - 1, y - size.height - 1, size.width + 2, size.height + baseline + 2),
-                  cv::Scalar(0, 0, 0), cv::FILLED);
+    const int y_centre = std::clamp(box.y + box.height / 2 + size.height / 2, size.height,
+                                    std::max(size.height, out.rows - baseline));
+    int y = y_centre;
+    const int step = size.height + baseline + 3;
+    for (int attempt = 1; attempt < 40; ++attempt) {
+      const cv::Rect candidate(x - 1, y - size.height - 1, size.width + 2,
+                               size.height + baseline + 2);
+      bool free = true;
+      for (const cv::Rect& placed : placed_labels) free = free && (candidate & placed).empty();
+      if (free) break;
+      const int offset = ((attempt + 1) / 2) * step * (attempt % 2 == 1 ? 1 : -1);
+      y = std::clamp(y_centre + offset, size.height, std::max(size.height, out.rows - baseline));
+    }
+    placed_labels.emplace_back(x - 1, y - size.height - 1, size.width + 2,
+                               size.height + baseline + 2);
     const bool right_of_box = x > box.x;
     const cv::Point anchor(right_of_box ? x - 1 : x + size.width + 1, y - size.height / 2);
     cv::line(out, anchor, cv::Point(box.x + box.width / 2, box.y + box.height / 2),
              instance_color(i), 1, cv::LINE_8);
+    cv::rectangle(out, placed_labels.back(), cv::Scalar(0, 0, 0), cv::FILLED);
+    const cv::Scalar color =
+        visibility[i] < 0.30 ? cv::Scalar(0, 0, 255) : cv::Scalar(255, 255, 255);
     cv::putText(out, text, cv::Point(x, y), font, scale, color, thickness, cv::LINE_8);
   }
   return out;
