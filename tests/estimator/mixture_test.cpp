@@ -1,0 +1,103 @@
+#include "clutterscope/estimator/mixture.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace clutterscope::estimator {
+namespace {
+
+TEST(Mixture, LogEvaluateMatchesClosedFormForTwoComponents) {
+  GaussianMixture m;
+  m.means.resize(2, 2);
+  m.means << 0, 1, 0, -2;
+  m.weights = Eigen::Vector2d(0.25, 0.75);
+  m.variances.resize(2, 2);
+  m.variances << 1, 0.5, 4, 2;
+  const Eigen::Vector2d x(0.3, -1.0);
+  auto gauss = [](double x, double mu, double v) {
+    return std::exp(-0.5 * (x - mu) * (x - mu) / v) / std::sqrt(2 * M_PI * v);
+  };
+  const double expected =
+      0.25 * gauss(0.3, 0, 1) * gauss(-1, 0, 4) + 0.75 * gauss(0.3, 1, 0.5) * gauss(-1, -2, 2);
+  EXPECT_NEAR(log_evaluate(m, x)[0], std::log(expected), 1e-12);
+  std::string why;
+  EXPECT_TRUE(m.IsValid(&why)) << why;
+}
+
+TEST(Mixture, LogEvaluateStaysFiniteFarAway) {
+  const GaussianMixture m =
+      make_kernel_density(Eigen::MatrixXd::Zero(3, 4), Eigen::Vector3d(1e-4, 1e-4, 1e-4));
+  const Eigen::VectorXd value = log_evaluate(m, Eigen::Vector3d(10, 10, 10));
+  EXPECT_TRUE(std::isfinite(value[0]));
+  EXPECT_LT(value[0], -1e5);
+}
+
+TEST(Mixture, InvalidMixturesAreExplained) {
+  GaussianMixture m = make_kernel_density(Eigen::MatrixXd::Zero(3, 4), Eigen::Vector3d(1, 1, 1));
+  m.weights[0] = 0.9;
+  std::string why;
+  EXPECT_FALSE(m.IsValid(&why));
+  EXPECT_NE(why.find("sum to"), std::string::npos) << why;
+  m = make_kernel_density(Eigen::MatrixXd::Zero(3, 4), Eigen::Vector3d(1, 0, 1));
+  EXPECT_FALSE(m.IsValid(&why));
+  EXPECT_NE(why.find("variances"), std::string::npos) << why;
+}
+
+TEST(Mixture, RuleOfThumbMatchesSilvermanFormula) {
+  // Samples with known standard deviation 2 in x and 0.5 in y, equal weights.
+  Eigen::MatrixXd samples(2, 4);
+  samples << -2, 2, -2, 2, 0.5, 0.5, -0.5, -0.5;
+  const Eigen::VectorXd w = Eigen::VectorXd::Constant(4, 0.25);
+  const Eigen::VectorXd h2 = rule_of_thumb_bandwidth(samples, w, 1e-12);
+  const double factor = std::pow(4.0 / (4.0 * 4.0), 1.0 / 6.0);  // d = 2, N = 4
+  EXPECT_NEAR(std::sqrt(h2[0]), 2.0 * factor, 1e-12);
+  EXPECT_NEAR(std::sqrt(h2[1]), 0.5 * factor, 1e-12);
+  // Coincident samples fall back to the floor.
+  EXPECT_DOUBLE_EQ(rule_of_thumb_bandwidth(Eigen::MatrixXd::Ones(2, 4), w, 1e-6)[0], 1e-6);
+}
+
+TEST(Mixture, SamplingReproducesMixtureMoments) {
+  GaussianMixture m;
+  m.means.resize(1, 2);
+  m.means << -1, 3;
+  m.weights = Eigen::Vector2d(0.3, 0.7);
+  m.variances = Eigen::MatrixXd::Constant(1, 1, 0.5);
+  std::mt19937_64 rng(7);
+  const int n = 40000;
+  const Eigen::MatrixXd s = sample_mixture(m, n, rng);
+  const double mean = mixture_mean(m)[0];
+  const double var = mixture_covariance(m)(0, 0);
+  EXPECT_NEAR(mean, 0.3 * -1 + 0.7 * 3, 1e-12);
+  EXPECT_NEAR(s.mean(), mean, 4 * std::sqrt(var / n));
+  const double sample_var = (s.array() - s.mean()).square().sum() / (n - 1);
+  EXPECT_NEAR(sample_var / var, 1.0, 0.03);
+}
+
+TEST(Mixture, LogWeightsNormaliseWithoutOverflowAndReportEss) {
+  Eigen::VectorXd log_w(3);
+  log_w << 1000, 1000, -std::numeric_limits<double>::infinity();
+  Eigen::VectorXd w;
+  ASSERT_TRUE(normalise_log_weights(log_w, &w));
+  EXPECT_DOUBLE_EQ(w[0], 0.5);
+  EXPECT_DOUBLE_EQ(w[2], 0.0);
+  EXPECT_DOUBLE_EQ(effective_sample_size(w), 2.0);
+  log_w.setConstant(-std::numeric_limits<double>::infinity());
+  EXPECT_FALSE(normalise_log_weights(log_w, &w));
+  EXPECT_DOUBLE_EQ(effective_sample_size(w), 3.0);
+}
+
+TEST(Mixture, SystematicResampleKeepsProportions) {
+  const Eigen::Vector4d w(0.5, 0.25, 0.0, 0.25);
+  std::mt19937_64 rng(3);
+  const std::vector<int> idx = systematic_resample(w, 8, rng);
+  int counts[4] = {0, 0, 0, 0};
+  for (int i : idx) ++counts[i];
+  EXPECT_EQ(counts[0], 4);
+  EXPECT_EQ(counts[1], 2);
+  EXPECT_EQ(counts[2], 0);
+  EXPECT_EQ(counts[3], 2);
+}
+
+}  // namespace
+}  // namespace clutterscope::estimator
