@@ -391,6 +391,10 @@ std::shared_ptr<const BopDataset::SceneFiles> BopDataset::scene(const std::strin
 
   std::lock_guard<std::mutex> lock(cache_->mutex);
   auto& scenes = cache_->scenes;
+  // Another thread may have parsed the same scene meanwhile: keep one copy.
+  for (const auto& cached : scenes) {
+    if (cached->scene_id == scene_id && cached->split == split) return cached;
+  }
   scenes.push_front(std::move(files));
   while (scenes.size() > cache_->capacity) scenes.pop_back();
   return scenes.front();

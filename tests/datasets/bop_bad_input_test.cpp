@@ -287,6 +287,12 @@ TEST_F(BopBadInput, ViewWithoutDepth) {
                   {"test/000001", "scene 1, image 1", "no depth image"});
 }
 
+TEST_F(BopBadInput, ImageSizeUnknownWithoutImagesOrCameraJson) {
+  fs::remove_all(scene_file("depth"));
+  expect_mentions(load_error(),
+                  {"000001", "scene 1, image 0", "image size unknown", "camera.json"});
+}
+
 TEST_F(BopBadInput, UnknownSplit) {
   const BopDataset dataset = BopDataset::open(dir_.path());
   DatasetSelection selection;
