@@ -1,0 +1,33 @@
+#pragma once
+
+// The report's figures as SVG (svg.hpp), each with axis labels carrying units.
+
+#include <clutterscope/tools/report/svg.hpp>
+#include <clutterscope/tools/report/tables.hpp>
+#include <clutterscope/tools/report/thresholds.hpp>
+#include <string>
+#include <vector>
+
+namespace clutterscope::tools::report {
+
+// Max-axis variance (log y) against visibility, coloured by position error (saturating at
+// 3 * accurate_cm), with the variance threshold as a dashed line. Estimates without an error
+// are grey.
+std::string variance_visibility_plot(const std::vector<ObjectRow>& objects,
+                                     double variance_threshold_cm2, double accurate_cm);
+
+// Precision, recall and F1 against the variance threshold (log x), with the chosen and the
+// recommended thresholds as vertical lines.
+std::string threshold_sweep_plot(const ThresholdAnalysis& analysis);
+
+// Histogram of object visibility in 5% bins with the cutoff as a vertical line.
+std::string visibility_histogram_plot(const std::vector<ObjectRow>& objects,
+                                      double visibility_cutoff);
+
+// The objects of one image with their visibility in % (the paper's Fig. 5): one bar per
+// object in its category colour, the percentage in red below the cutoff.
+std::string image_visibility_plot(const std::string& title,
+                                  const std::vector<ObjectRow>& image_objects,
+                                  double visibility_cutoff);
+
+}  // namespace clutterscope::tools::report

@@ -1,0 +1,207 @@
+#include <algorithm>
+#include <clutterscope/tools/report/thresholds.hpp>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+
+namespace clutterscope::tools::report {
+
+namespace {
+
+// Grid points this close (relative) to an exactly inserted threshold are dropped, so the
+// sweep shows 0.25 rather than 0.2512 next to 0.25.
+constexpr double kMergeRelativeDistance = 0.03;
+
+double round_significant(double value, int digits) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.*g", digits, value);
+  return std::strtod(buffer, nullptr);
+}
+
+std::string text(const Statistic& statistic, int decimals = 3) {
+  if (!statistic.defined()) return "n/a (" + statistic.undefined_reason + ")";
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, *statistic.value);
+  return buffer;
+}
+
+Statistic ratio(int numerator, int denominator, const char* reason) {
+  if (denominator == 0) return Statistic::undefined(reason);
+  return Statistic::of(static_cast<double>(numerator) / denominator);
+}
+
+}  // namespace
+
+bool ThresholdOptions::IsValid(std::string* why) const {
+  if (!(sweep_min_cm2 > 0.0 && sweep_max_cm2 > sweep_min_cm2)) {
+    *why = "threshold sweep needs 0 < min < max, got " + std::to_string(sweep_min_cm2) + " .. " +
+           std::to_string(sweep_max_cm2) + " cm^2";
+    return false;
+  }
+  if (steps_per_decade < 1) {
+    *why = "threshold steps per decade must be >= 1, got " + std::to_string(steps_per_decade);
+    return false;
+  }
+  if (!(accurate_cm > 0.0) || !std::isfinite(accurate_cm)) {
+    *why = "--accurate-cm must be > 0, got " + std::to_string(accurate_cm);
+    return false;
+  }
+  if (!(visibility_cutoff > 0.0 && visibility_cutoff <= 1.0)) {
+    *why = "--visibility-cutoff must be in (0, 1], got " + std::to_string(visibility_cutoff);
+    return false;
+  }
+  if (!(chosen_threshold_cm2 > 0.0) || !std::isfinite(chosen_threshold_cm2)) {
+    *why = "--variance-threshold-cm2 must be > 0, got " + std::to_string(chosen_threshold_cm2);
+    return false;
+  }
+  if (!(min_precision > 0.0 && min_precision <= 1.0)) {
+    *why = "minimum precision must be in (0, 1], got " + std::to_string(min_precision);
+    return false;
+  }
+  return true;
+}
+
+std::vector<double> sweep_thresholds(const ThresholdOptions& options) {
+  const std::vector<double> exact = {kPaperVarianceThresholdCm2, options.chosen_threshold_cm2};
+  const double decades = std::log10(options.sweep_max_cm2 / options.sweep_min_cm2);
+  const int steps = static_cast<int>(std::ceil(decades * options.steps_per_decade - 1e-9));
+  std::vector<double> thresholds;
+  for (int k = 0; k <= steps; ++k) {
+    const double value =
+        k == steps ? options.sweep_max_cm2
+                   : round_significant(
+                         options.sweep_min_cm2 *
+                             std::pow(10.0, static_cast<double>(k) / options.steps_per_decade),
+                         4);
+    const bool near_exact = std::any_of(exact.begin(), exact.end(), [&](double t) {
+      return std::abs(value - t) <= kMergeRelativeDistance * t;
+    });
+    if (!near_exact) thresholds.push_back(value);
+  }
+  thresholds.insert(thresholds.end(), exact.begin(), exact.end());
+  std::sort(thresholds.begin(), thresholds.end());
+  thresholds.erase(std::unique(thresholds.begin(), thresholds.end()), thresholds.end());
+  return thresholds;
+}
+
+ThresholdRow evaluate_threshold(const std::vector<ObjectRow>& objects, double threshold_cm2,
+                                double accurate_cm, double visibility_cutoff) {
+  ThresholdRow row;
+  row.threshold_cm2 = threshold_cm2;
+  for (const ObjectRow& object : objects) {
+    if (!object.estimate || !object.estimate->err_cm) continue;
+    ++row.evaluated;
+    const bool accurate = *object.estimate->err_cm <= accurate_cm;
+    const bool accepted = object.estimate->max_variance_cm2() <= threshold_cm2;
+    row.accurate += accurate;
+    row.accepted += accepted;
+    row.accepted_accurate += accepted && accurate;
+    row.accepted_below_cutoff += accepted && object.visib_fract < visibility_cutoff;
+  }
+  row.precision = ratio(row.accepted_accurate, row.accepted, "no estimate accepted");
+  row.recall = ratio(row.accepted_accurate, row.accurate, "no accurate estimate");
+  const int false_positives = row.accepted - row.accepted_accurate;
+  const int false_negatives = row.accurate - row.accepted_accurate;
+  row.f1 = ratio(2 * row.accepted_accurate,
+                 2 * row.accepted_accurate + false_positives + false_negatives,
+                 "no estimate accepted and none accurate");
+  row.accepted_below_cutoff_share =
+      ratio(row.accepted_below_cutoff, row.accepted, "no estimate accepted");
+  return row;
+}
+
+ThresholdRecommendation recommend_threshold(const std::vector<ThresholdRow>& sweep,
+                                            double min_precision) {
+  ThresholdRecommendation recommendation;
+  char target[32];
+  std::snprintf(target, sizeof(target), "%g", min_precision);
+  recommendation.largest_with_min_precision =
+      Statistic::undefined(std::string("no swept threshold reaches precision ") + target);
+  recommendation.best_f1 = Statistic::undefined("F1 is undefined at every swept threshold");
+  recommendation.best_f1_value = recommendation.best_f1;
+  for (const ThresholdRow& row : sweep) {  // ascending thresholds: later wins ties
+    if (row.precision.defined() && *row.precision.value >= min_precision) {
+      recommendation.largest_with_min_precision = Statistic::of(row.threshold_cm2);
+    }
+    if (row.f1.defined() && (!recommendation.best_f1_value.defined() ||
+                             *row.f1.value >= *recommendation.best_f1_value.value)) {
+      recommendation.best_f1 = Statistic::of(row.threshold_cm2);
+      recommendation.best_f1_value = row.f1;
+    }
+  }
+  return recommendation;
+}
+
+std::vector<CutoffRow> accepted_by_cutoff(const std::vector<ObjectRow>& objects,
+                                          double threshold_cm2, double accurate_cm) {
+  std::vector<CutoffRow> rows;
+  for (int tenth = 1; tenth <= 9; ++tenth) {
+    CutoffRow row;
+    row.visibility_cutoff = tenth / 10.0;
+    for (const ObjectRow& object : objects) {
+      if (!object.estimate || object.visib_fract >= row.visibility_cutoff) continue;
+      ++row.objects_below;
+      if (object.estimate->max_variance_cm2() > threshold_cm2) continue;
+      ++row.accepted_below;
+      const auto& error = object.estimate->err_cm;
+      row.accepted_below_inaccurate += error && *error > accurate_cm;
+    }
+    row.accepted_share =
+        ratio(row.accepted_below, row.objects_below, "no estimated object below the cutoff");
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+ThresholdAnalysis analyse_thresholds(const std::vector<ObjectRow>& objects,
+                                     const ThresholdOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument(why);
+  ThresholdAnalysis analysis;
+  analysis.options = options;
+  for (double threshold : sweep_thresholds(options)) {
+    analysis.sweep.push_back(
+        evaluate_threshold(objects, threshold, options.accurate_cm, options.visibility_cutoff));
+  }
+  analysis.recommendation = recommend_threshold(analysis.sweep, options.min_precision);
+  analysis.chosen = evaluate_threshold(objects, options.chosen_threshold_cm2, options.accurate_cm,
+                                       options.visibility_cutoff);
+  analysis.by_cutoff =
+      accepted_by_cutoff(objects, options.chosen_threshold_cm2, options.accurate_cm);
+  return analysis;
+}
+
+std::string format_threshold_check(const std::vector<ObjectRow>& objects, double threshold_cm2,
+                                   double visibility_cutoff, double accurate_cm) {
+  const ThresholdRow row =
+      evaluate_threshold(objects, threshold_cm2, accurate_cm, visibility_cutoff);
+  char line[256];
+  std::ostringstream out;
+  std::snprintf(line, sizeof(line),
+                "variance threshold %g cm^2 (confident iff every axis variance <= T), "
+                "accurate iff error <= %g cm\n",
+                threshold_cm2, accurate_cm);
+  out << line;
+  out << "  estimates with an error  " << row.evaluated << "\n";
+  out << "  accurate                 " << row.accurate << "\n";
+  out << "  accepted (confident)     " << row.accepted << "\n";
+  out << "  precision                " << text(row.precision) << "\n";
+  out << "  recall                   " << text(row.recall) << "\n";
+  out << "  F1                       " << text(row.f1) << "\n";
+  std::snprintf(line, sizeof(line), "  accepted below %3.0f%%     %d (share of accepted %s)\n",
+                visibility_cutoff * 100.0, row.accepted_below_cutoff,
+                text(row.accepted_below_cutoff_share).c_str());
+  out << line << "\n";
+  out << "visibility cutoff  objects below  accepted  accepted share  accepted & inaccurate\n";
+  for (const CutoffRow& cutoff : accepted_by_cutoff(objects, threshold_cm2, accurate_cm)) {
+    std::snprintf(line, sizeof(line), "%16.0f%%  %13d  %8d  %14s  %21d\n",
+                  cutoff.visibility_cutoff * 100.0, cutoff.objects_below, cutoff.accepted_below,
+                  cutoff.accepted_share.defined() ? text(cutoff.accepted_share).c_str() : "n/a",
+                  cutoff.accepted_below_inaccurate);
+    out << line;
+  }
+  return out.str();
+}
+
+}  // namespace clutterscope::tools::report
