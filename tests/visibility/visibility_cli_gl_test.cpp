@@ -61,6 +61,9 @@ void expect_same_files(const fs::path& a, const fs::path& b) {
   const auto files_a = final_files(a), files_b = final_files(b);
   ASSERT_FALSE(files_a.empty());
   EXPECT_EQ(files_a.size(), files_b.size());
+  for (const auto& [name, bytes] : files_b) {
+    EXPECT_TRUE(files_a.count(name)) << name << " only in " << b;
+  }
   for (const auto& [name, bytes] : files_a) {
     auto found = files_b.find(name);
     ASSERT_NE(found, files_b.end()) << name << " missing in " << b;

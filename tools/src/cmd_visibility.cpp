@@ -1,8 +1,11 @@
 // `clutterscope visibility`: Eq. 10 (rendered) or bop_toolkit-exact (bop19/bop18) visibility of
 // every GT instance of a BOP dataset, on the batch runner (resumable, shardable, --jobs).
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/render/context.hpp>
@@ -66,6 +69,22 @@ nlohmann::json box_json(const visibility::BopBox& box) {
 visibility::BopBox box_from_json(const nlohmann::json& json) {
   return {json.at(0).get<int>(), json.at(1).get<int>(), json.at(2).get<int>(),
           json.at(3).get<int>()};
+}
+
+// Writes OUT/relative atomically through a temporary file under OUT/.batch/tmp/, so that a run
+// killed mid-write leaves no stray file among the outputs (the rename is atomic: same folder
+// tree, same file system).
+void write_output_file(const fs::path& out_dir, const fs::path& relative,
+                       const std::string& bytes) {
+  static std::atomic<unsigned long> counter{0};
+  const fs::path temporary_dir = out_dir / ".batch" / "tmp";
+  fs::create_directories(temporary_dir);
+  const fs::path temporary =
+      temporary_dir / (std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".tmp");
+  datasets::write_file_atomically(temporary, bytes);
+  const fs::path target = out_dir / relative;
+  fs::create_directories(target.parent_path());
+  fs::rename(temporary, target);
 }
 
 // The per-item summary carries every instance's six fields (doubles round-trip exactly through
@@ -179,9 +198,7 @@ class VisibilityWorker {
   }
 
   void write_file(const fs::path& relative, const std::string& bytes, ItemOutput* output) const {
-    const fs::path path = fs::path(arguments_.dataset.out) / relative;
-    fs::create_directories(path.parent_path());
-    datasets::write_file_atomically(path, bytes);
+    write_output_file(arguments_.dataset.out, relative, bytes);
     output->files.push_back(relative.generic_string());
   }
 
@@ -356,9 +373,7 @@ class VisibilitySummary : public SummaryBuilder {
   void flush_scene() {
     const fs::path relative = fs::path("bop") / current_scene_->first /
                               six_digits(current_scene_->second) / "scene_gt_info.json";
-    fs::create_directories((out_dir_ / relative).parent_path());
-    datasets::write_file_atomically(out_dir_ / relative,
-                                    visibility::scene_gt_info_json(scene_infos_));
+    write_output_file(out_dir_, relative, visibility::scene_gt_info_json(scene_infos_));
     bop_files_.push_back(relative.generic_string());
     scene_infos_.clear();
     current_scene_.reset();
