@@ -1,0 +1,157 @@
+#include <algorithm>
+#include <clutterscope/datasets/detector.hpp>
+#include <clutterscope/datasets/errors.hpp>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+namespace clutterscope::datasets {
+
+namespace {
+
+double round_to(double value, double step) { return std::round(value / step) * step; }
+
+// Jitters the box edges independently and clips to the image; keeps at least 1 px.
+Eigen::Vector4d jittered_box(double x0, double y0, double x1, double y1, double jitter, int width,
+                             int height, std::mt19937_64& rng) {
+  std::normal_distribution<double> gaussian(0.0, 1.0);
+  const double w = std::max(1.0, x1 - x0), h = std::max(1.0, y1 - y0);
+  x0 += jitter * w * gaussian(rng);
+  x1 += jitter * w * gaussian(rng);
+  y0 += jitter * h * gaussian(rng);
+  y1 += jitter * h * gaussian(rng);
+  x0 = std::clamp(x0, 0.0, width - 1.0);
+  y0 = std::clamp(y0, 0.0, height - 1.0);
+  x1 = std::clamp(x1, x0 + 1.0, static_cast<double>(width));
+  y1 = std::clamp(y1, y0 + 1.0, static_cast<double>(height));
+  return Eigen::Vector4d(round_to(x0, 0.01), round_to(y0, 0.01), round_to(x1 - x0, 0.01),
+                         round_to(y1 - y0, 0.01));
+}
+
+}  // namespace
+
+bool DetectorOptions::IsValid(std::string* why) const {
+  const auto fail = [&](const std::string& message) {
+    if (why) *why = message;
+    return false;
+  };
+  if (!(box_jitter >= 0)) return fail("detector box jitter must be >= 0");
+  if (min_visible_px < 1) return fail("detector min visible pixels must be >= 1");
+  if (!(score_at_zero_visibility >= 0 && score_at_zero_visibility <= 1)) {
+    return fail("detector score at zero visibility must be in [0, 1]");
+  }
+  if (!(score_noise >= 0)) return fail("detector score noise must be >= 0");
+  if (!(duplicate_probability >= 0 && duplicate_probability <= 1)) {
+    return fail("detector duplicate probability must be in [0, 1]");
+  }
+  if (!(false_positives_per_image >= 0)) {
+    return fail("detector false positives per image must be >= 0");
+  }
+  return true;
+}
+
+std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorInstance>& instances,
+                              const std::vector<int>& category_ids, const DetectorOptions& options,
+                              std::mt19937_64& rng) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument(why);
+  if (labels.type() != CV_32S) throw std::invalid_argument("detect needs a CV_32S label image");
+  const int n = static_cast<int>(instances.size());
+  std::vector<std::int64_t> visible(n, 0);
+  std::vector<int> x0(n, labels.cols), y0(n, labels.rows), x1(n, -1), y1(n, -1);
+  for (int v = 0; v < labels.rows; ++v) {
+    const int* row = labels.ptr<int>(v);
+    for (int u = 0; u < labels.cols; ++u) {
+      const int i = row[u] - 1;
+      if (i < 0 || i >= n) continue;
+      ++visible[i];
+      x0[i] = std::min(x0[i], u);
+      y0[i] = std::min(y0[i], v);
+      x1[i] = std::max(x1[i], u);
+      y1[i] = std::max(y1[i], v);
+    }
+  }
+  std::normal_distribution<double> gaussian(0.0, 1.0);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Detection> detections;
+  for (int i = 0; i < n; ++i) {
+    if (instances[i].fixed || visible[i] < options.min_visible_px) continue;
+    const double visibility =
+        instances[i].silhouette_px > 0
+            ? std::min(1.0, static_cast<double>(visible[i]) / instances[i].silhouette_px)
+            : 1.0;
+    Detection detection;
+    detection.obj_id = instances[i].obj_id;
+    const double score = options.score_at_zero_visibility +
+                         (1.0 - options.score_at_zero_visibility) * visibility +
+                         options.score_noise * gaussian(rng);
+    detection.score = round_to(std::clamp(score, 0.01, 1.0), 1e-4);
+    // bop_toolkit's bbox: [xmin, ymin, xmax - xmin, ymax - ymin].
+    detection.bbox =
+        jittered_box(x0[i], y0[i], x1[i], y1[i], options.box_jitter, labels.cols, labels.rows, rng);
+    detections.push_back(detection);
+    if (unit(rng) < options.duplicate_probability) {
+      Detection duplicate = detection;
+      duplicate.score = round_to(detection.score / 2, 1e-4);
+      duplicate.bbox = jittered_box(x0[i], y0[i], x1[i], y1[i], 2 * options.box_jitter + 0.05,
+                                    labels.cols, labels.rows, rng);
+      detections.push_back(duplicate);
+    }
+  }
+  if (options.false_positives_per_image > 0 && !category_ids.empty()) {
+    const int false_positives =
+        std::poisson_distribution<int>(options.false_positives_per_image)(rng);
+    for (int k = 0; k < false_positives; ++k) {
+      Detection detection;
+      detection.obj_id = category_ids[static_cast<std::size_t>(unit(rng) * category_ids.size()) %
+                                      category_ids.size()];
+      detection.score = round_to(0.05 + 0.25 * unit(rng), 1e-4);
+      const double w = (0.05 + 0.15 * unit(rng)) * labels.cols;
+      const double h = (0.05 + 0.15 * unit(rng)) * labels.rows;
+      const double x = unit(rng) * (labels.cols - w), y = unit(rng) * (labels.rows - h);
+      detection.bbox = jittered_box(x, y, x + w, y + h, 0.0, labels.cols, labels.rows, rng);
+      detections.push_back(detection);
+    }
+  }
+  return detections;
+}
+
+DetectionsWriter::DetectionsWriter(std::filesystem::path path)
+    : path_(std::move(path)), temporary_(path_.string() + ".partial") {
+  if (path_.has_parent_path()) std::filesystem::create_directories(path_.parent_path());
+  stream_.open(temporary_, std::ios::binary | std::ios::trunc);
+  if (!stream_) throw DatasetError(temporary_, "cannot open for writing");
+  stream_ << "[";
+}
+
+DetectionsWriter::~DetectionsWriter() {
+  if (!finished_) {
+    stream_.close();
+    std::error_code ignored;
+    std::filesystem::remove(temporary_, ignored);
+  }
+}
+
+void DetectionsWriter::add(int scene_id, int im_id, const std::vector<Detection>& detections) {
+  for (const auto& detection : detections) {
+    nlohmann::ordered_json entry;
+    entry["scene_id"] = scene_id;
+    entry["image_id"] = im_id;
+    entry["category_id"] = detection.obj_id;
+    entry["score"] = detection.score;
+    entry["bbox"] = {detection.bbox[0], detection.bbox[1], detection.bbox[2], detection.bbox[3]};
+    entry["time"] = detection.time;
+    stream_ << (count_ == 0 ? "\n  " : ",\n  ") << entry.dump();
+    ++count_;
+  }
+  if (!stream_) throw DatasetError(temporary_, "write failed");
+}
+
+void DetectionsWriter::finish() {
+  stream_ << (count_ == 0 ? "]\n" : "\n]\n");
+  stream_.close();
+  if (!stream_) throw DatasetError(temporary_, "write failed");
+  std::filesystem::rename(temporary_, path_);
+  finished_ = true;
+}
+
+}  // namespace clutterscope::datasets

@@ -1,0 +1,106 @@
+#include <gtest/gtest.h>
+
+#include <clutterscope/datasets/detector.hpp>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+namespace clutterscope::datasets {
+namespace {
+
+// Three instances: 1 fully visible, 2 half hidden behind 1, 3 completely hidden; 4 is fixed.
+cv::Mat label_image() {
+  cv::Mat labels(100, 120, CV_32S, cv::Scalar(4));  // the table everywhere else
+  labels(cv::Rect(10, 20, 20, 20)).setTo(1);        // x 10..29, y 20..39
+  labels(cv::Rect(50, 60, 20, 10)).setTo(2);        // half of a 20 x 20 silhouette visible
+  return labels;
+}
+
+std::vector<DetectorInstance> instances() {
+  return {{1, 400, false}, {2, 400, false}, {3, 300, false}, {16, 10000, true}};
+}
+
+TEST(Detector, BoxesOfVisiblePixelsAndScoresFallingWithVisibility) {
+  DetectorOptions options;
+  options.box_jitter = 0;
+  options.score_noise = 0;
+  std::mt19937_64 rng(1);
+  const auto detections = detect(label_image(), instances(), {1, 2, 3}, options, rng);
+  ASSERT_EQ(detections.size(), 2u) << "the hidden and the fixed instance are not detected";
+  EXPECT_EQ(detections[0].obj_id, 1);
+  EXPECT_EQ(detections[0].bbox, Eigen::Vector4d(10, 20, 19, 19));  // bop_toolkit: no +1
+  EXPECT_DOUBLE_EQ(detections[0].score, 1.0);
+  EXPECT_EQ(detections[1].obj_id, 2);
+  EXPECT_EQ(detections[1].bbox, Eigen::Vector4d(50, 60, 19, 9));
+  EXPECT_DOUBLE_EQ(detections[1].score, 0.3 + 0.7 * 0.5);
+}
+
+TEST(Detector, JitterHasTheConfiguredSpread) {
+  DetectorOptions options;
+  options.box_jitter = 0.1;
+  const int trials = 4000;
+  double sum = 0, sum_sq = 0;
+  std::mt19937_64 rng(3);
+  for (int t = 0; t < trials; ++t) {
+    const auto detections = detect(label_image(), instances(), {}, options, rng);
+    const double x = detections[0].bbox[0] - 10;
+    sum += x;
+    sum_sq += x * x;
+  }
+  const double mean = sum / trials, sigma = std::sqrt(sum_sq / trials - mean * mean);
+  const double expected = 0.1 * 19;  // fraction of the box width
+  EXPECT_NEAR(mean, 0.0, 5 * expected / std::sqrt(trials));
+  EXPECT_NEAR(sigma, expected, 5 * expected / std::sqrt(2.0 * trials) + 0.01);
+}
+
+TEST(Detector, DuplicatesAndFalsePositivesAtTheConfiguredRates) {
+  DetectorOptions options;
+  options.duplicate_probability = 1.0;
+  options.false_positives_per_image = 2.0;
+  std::mt19937_64 rng(4);
+  const int images = 2000;
+  std::size_t total = 0;
+  for (int i = 0; i < images; ++i) {
+    const auto detections = detect(label_image(), instances(), {1, 2, 3}, options, rng);
+    total += detections.size();
+    for (const auto& d : detections) {
+      EXPECT_GE(d.bbox[0], 0);
+      EXPECT_GE(d.bbox[2], 1);
+      EXPECT_LE(d.bbox[0] + d.bbox[2], 120 + 1e-9);
+      EXPECT_LE(d.bbox[1] + d.bbox[3], 100 + 1e-9);
+    }
+  }
+  // 2 true + 2 duplicates + Poisson(2) false positives per image.
+  const double mean = static_cast<double>(total) / images;
+  EXPECT_NEAR(mean, 6.0, 5 * std::sqrt(2.0 / images));
+}
+
+TEST(Detector, WritesBopDetectionResults) {
+  const auto path = std::filesystem::temp_directory_path() / "clutterscope_detector_test.json";
+  {
+    DetectionsWriter writer(path);
+    Detection d;
+    d.obj_id = 5;
+    d.score = 0.75;
+    d.bbox = Eigen::Vector4d(1, 2, 3, 4);
+    writer.add(3, 7, {d, d});
+    writer.add(4, 0, {});
+    EXPECT_FALSE(std::filesystem::exists(path)) << "written atomically at finish()";
+    writer.finish();
+  }
+  std::ifstream stream(path);
+  const auto json = nlohmann::json::parse(stream);
+  ASSERT_EQ(json.size(), 2u);
+  const auto& entry = json[0];
+  EXPECT_EQ(entry.size(), 6u);
+  EXPECT_EQ(entry["scene_id"], 3);
+  EXPECT_EQ(entry["image_id"], 7);
+  EXPECT_EQ(entry["category_id"], 5);
+  EXPECT_EQ(entry["score"], 0.75);
+  EXPECT_EQ(entry["bbox"], nlohmann::json({1.0, 2.0, 3.0, 4.0}));
+  EXPECT_TRUE(entry.contains("time"));
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace clutterscope::datasets
