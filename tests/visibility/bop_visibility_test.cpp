@@ -127,6 +127,36 @@ TEST(BopGtInfo, HandSceneBop18) {
   EXPECT_EQ(info.bbox_visib, (BopBox{1, 1, 0, 1}));
 }
 
+TEST(BopGtInfo, WindowedComputationEqualsTheWholeImage) {
+  // The object lies in image columns 0..1, rows 1..2; any window holding them gives the same
+  // six fields and the same visible pixels, with a principal point that makes distances
+  // depend on the pixel position.
+  HandScene scene;
+  scene.camera = {500.0, 400.0, 2.5, 1.5};
+  const CanvasSilhouette silhouette = canvas_silhouette(scene.canvas, 6, 4);
+  const cv::Mat whole_model = scene.model_in_image();
+  cv::Mat whole_visib;
+  const BopGtInfo whole = compute_bop_gt_info(whole_model, silhouette, scene.test, scene.camera,
+                                              {BopMode::kBop19, 15.0}, &whole_visib);
+  const cv::Mat test_distance = depth_to_distance(scene.test, scene.camera);
+  for (const cv::Rect& window : {cv::Rect(0, 1, 2, 2), cv::Rect(0, 0, 4, 4)}) {
+    cv::Mat visib;
+    const BopGtInfo windowed =
+        compute_bop_gt_info_in_window(whole_model(window).clone(), window, silhouette,
+                                      test_distance, scene.camera, {BopMode::kBop19, 15.0}, &visib);
+    EXPECT_EQ(windowed.px_count_valid, whole.px_count_valid);
+    EXPECT_EQ(windowed.px_count_visib, whole.px_count_visib);
+    EXPECT_EQ(windowed.visib_fract, whole.visib_fract);
+    EXPECT_EQ(windowed.bbox_obj, whole.bbox_obj);
+    EXPECT_EQ(windowed.bbox_visib, whole.bbox_visib);
+    EXPECT_EQ(cv::countNonZero(visib != whole_visib(window)), 0);
+  }
+  // The distance of a window is the distance of the same pixels of the whole image.
+  const cv::Mat window_distance =
+      depth_to_distance(scene.test(cv::Rect(1, 2, 3, 2)).clone(), scene.camera, {1, 2});
+  EXPECT_EQ(cv::countNonZero(window_distance != test_distance(cv::Rect(1, 2, 3, 2))), 0);
+}
+
 TEST(BopGtInfo, FullyHiddenObjectHasNoBoxes) {
   HandScene scene;
   scene.test.setTo(100.0f);  // everything far in front of the object

@@ -11,14 +11,16 @@ namespace clutterscope::visibility {
 
 std::string to_string(BopMode mode) { return mode == BopMode::kBop19 ? "bop19" : "bop18"; }
 
-cv::Mat depth_to_distance(const cv::Mat& depth_mm, const BopCamera& camera) {
+cv::Mat depth_to_distance(const cv::Mat& depth_mm, const BopCamera& camera, cv::Point origin) {
   CV_Assert(depth_mm.type() == CV_32F);
   // Precomputer.precompute_lazy: (xs - cx) / fx and (ys - cy) / fy in float64.
   std::vector<double> xs(depth_mm.cols);
-  for (int u = 0; u < depth_mm.cols; ++u) xs[u] = (static_cast<double>(u) - camera.cx) / camera.fx;
+  for (int u = 0; u < depth_mm.cols; ++u) {
+    xs[u] = (static_cast<double>(origin.x + u) - camera.cx) / camera.fx;
+  }
   cv::Mat dist(depth_mm.size(), CV_64F);
   for (int v = 0; v < depth_mm.rows; ++v) {
-    const double y = (static_cast<double>(v) - camera.cy) / camera.fy;
+    const double y = (static_cast<double>(origin.y + v) - camera.cy) / camera.fy;
     const float* depth_row = depth_mm.ptr<float>(v);
     double* dist_row = dist.ptr<double>(v);
     for (int u = 0; u < depth_mm.cols; ++u) {
@@ -99,13 +101,25 @@ BopGtInfo compute_bop_gt_info(const cv::Mat& model_depth_mm, const CanvasSilhoue
                               const cv::Mat& test_depth_mm, const BopCamera& camera,
                               const BopVisibilityOptions& options, cv::Mat* visib_mask) {
   CV_Assert(model_depth_mm.size() == test_depth_mm.size());
-  const cv::Mat dist_model = depth_to_distance(model_depth_mm, camera);
-  const cv::Mat dist_test = depth_to_distance(test_depth_mm, camera);
+  return compute_bop_gt_info_in_window(
+      model_depth_mm, cv::Rect(cv::Point(0, 0), test_depth_mm.size()), canvas,
+      depth_to_distance(test_depth_mm, camera), camera, options, visib_mask);
+}
+
+BopGtInfo compute_bop_gt_info_in_window(const cv::Mat& model_depth_mm, const cv::Rect& window,
+                                        const CanvasSilhouette& canvas,
+                                        const cv::Mat& test_distance, const BopCamera& camera,
+                                        const BopVisibilityOptions& options, cv::Mat* visib_mask) {
+  CV_Assert(model_depth_mm.size() == window.size());
+  CV_Assert(test_distance.type() == CV_64F &&
+            (window & cv::Rect(cv::Point(0, 0), test_distance.size())) == window);
+  const cv::Mat dist_model = depth_to_distance(model_depth_mm, camera, window.tl());
+  const cv::Mat dist_test = test_distance(window);
   cv::Mat visib = estimate_visib_mask(dist_test, dist_model, options.delta_mm, options.mode);
 
   BopGtInfo info;
   info.px_count_all = canvas.pixel_count;
-  // np.sum(dist_im[obj_mask_gt] > 0) with obj_mask_gt = dist_gt > 0.
+  // np.sum(dist_im[obj_mask_gt] > 0) with obj_mask_gt = dist_gt > 0 (zero outside the window).
   info.px_count_valid = cv::countNonZero((dist_model > 0) & (dist_test > 0));
   info.px_count_visib = cv::countNonZero(visib);
   info.visib_fract = info.px_count_all > 0 ? static_cast<double>(info.px_count_visib) /
@@ -113,7 +127,7 @@ BopGtInfo compute_bop_gt_info(const cv::Mat& model_depth_mm, const CanvasSilhoue
                                            : 0.0;
   if (info.px_count_visib > 0) {
     info.bbox_obj = to_bop_box(canvas.bbox);
-    info.bbox_visib = calc_2d_bbox(visib);
+    info.bbox_visib = calc_2d_bbox(visib, window.x, window.y);
   }
   if (visib_mask) *visib_mask = std::move(visib);
   return info;

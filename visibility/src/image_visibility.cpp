@@ -113,9 +113,12 @@ void compute_bop(render::Renderer& renderer, const render::Intrinsics& intrinsic
   const BopVisibilityOptions bop_options{
       options.mode == VisibilityMode::kBop19 ? BopMode::kBop19 : BopMode::kBop18, options.delta_mm};
   const cv::Rect image_on_canvas(width, height, width, height);
+  // The measured distances once per image; per object, only its window is processed.
+  const cv::Mat test_distance = visibility::depth_to_distance(measured_depth_mm, bop_camera);
   renderer.render_each_alone(intrinsics.enlarged(3), instances, [&](const render::AloneView& view) {
     CanvasSilhouette silhouette;
-    cv::Mat model_mm(height, width, CV_32F, cv::Scalar(0));
+    cv::Rect window;  // image coordinates
+    cv::Mat model_mm;
     if (!view.rect.empty()) {
       const cv::Mat mask = view.depth > 0;
       silhouette.pixel_count = cv::countNonZero(mask);
@@ -123,21 +126,29 @@ void compute_bop(render::Renderer& renderer, const render::Intrinsics& intrinsic
       if (!box.empty()) silhouette.bbox = box + view.rect.tl() - image_on_canvas.tl();
       const cv::Rect overlap = view.rect & image_on_canvas;
       if (!overlap.empty()) {
+        window = overlap - image_on_canvas.tl();
         // The BOP boundary: metres -> millimetres.
-        view.depth(overlap - view.rect.tl())
-            .convertTo(model_mm(overlap - image_on_canvas.tl()), CV_32F, 1000.0);
+        view.depth(overlap - view.rect.tl()).convertTo(model_mm, CV_32F, 1000.0);
       }
+    }
+    if (window.empty()) {  // nothing in the image: a 1-pixel window of background
+      window = cv::Rect(0, 0, 1, 1);
+      model_mm = cv::Mat(1, 1, CV_32F, cv::Scalar(0));
     }
     cv::Mat visib;
     ObjectVisibility& object = result->objects[view.index];
-    object.info = compute_bop_gt_info(model_mm, silhouette, measured_depth_mm, bop_camera,
-                                      bop_options, masks ? &visib : nullptr);
+    object.info = compute_bop_gt_info_in_window(model_mm, window, silhouette, test_distance,
+                                                bop_camera, bop_options, masks ? &visib : nullptr);
     // V^s in BOP modes: sum px_count_visib / sum px_count_all, the px_count_all-weighted
     // mean of visib_fract.
     object.counts = {object.info.px_count_all, object.info.px_count_visib};
     if (masks) {
-      masks->silhouette[view.index] = model_mm > 0;
-      masks->visible[view.index] = visib * 255;
+      cv::Mat silhouette_mask(height, width, CV_8U, cv::Scalar(0));
+      cv::Mat visible_mask(height, width, CV_8U, cv::Scalar(0));
+      silhouette_mask(window).setTo(255, model_mm > 0);
+      visible_mask(window).setTo(255, visib);
+      masks->silhouette[view.index] = silhouette_mask;
+      masks->visible[view.index] = visible_mask;
     }
   });
 }

@@ -55,8 +55,10 @@ struct CanvasSilhouette {
 
 // misc.depth_im_to_dist_im_fast: depth (CV_32F, mm, 0 = none) to distance from the camera
 // centre (CV_64F, mm): sqrt((x d)^2 + (y d)^2 + d^2) with x = (u - cx) / fx, y = (v - cy) / fy
-// at integer (u, v), evaluated in that order in float64.
-cv::Mat depth_to_distance(const cv::Mat& depth_mm, const BopCamera& camera);
+// at integer (u, v), evaluated in that order in float64. `origin`: the image pixel that
+// depth_mm(0, 0) is (for a window of the image).
+cv::Mat depth_to_distance(const cv::Mat& depth_mm, const BopCamera& camera,
+                          cv::Point origin = cv::Point(0, 0));
 
 // visibility._estimate_visib_mask on distance images (CV_64F): CV_8U mask, 1 = visible.
 //  bop19: d_model > 0 and (float32(d_model) - float32(d_test) <= delta or d_test == 0)
@@ -88,6 +90,16 @@ struct BopVisibilityOptions {
 BopGtInfo compute_bop_gt_info(const cv::Mat& model_depth_mm, const CanvasSilhouette& canvas,
                               const cv::Mat& test_depth_mm, const BopCamera& camera,
                               const BopVisibilityOptions& options, cv::Mat* visib_mask = nullptr);
+
+// The same for an object whose rendering is zero outside `window` (a rectangle of the
+// image): model_depth_mm is the window's content, test_distance the distance image of the
+// whole measured depth (depth_to_distance, computed once per image). Identical results, with
+// per-object work proportional to the window. visib_mask (if given) covers the window.
+BopGtInfo compute_bop_gt_info_in_window(const cv::Mat& model_depth_mm, const cv::Rect& window,
+                                        const CanvasSilhouette& canvas,
+                                        const cv::Mat& test_distance, const BopCamera& camera,
+                                        const BopVisibilityOptions& options,
+                                        cv::Mat* visib_mask = nullptr);
 
 // The measured depth as bop_toolkit computes it: inout.load_depth (the PNG's integer values
 // as float32) times depth_scale, multiplied in float32. Accepts 16-bit or 8-bit single-channel
