@@ -105,13 +105,39 @@ void main() {
 }
 )";
 
-constexpr const char* kDepthLabelFragmentShader = R"(#version 330 core
+// Depth is the exact intersection of the pixel's ray with the triangle's plane, computed from
+// the pixel position relative to its tile: interpolated attributes depend on the absolute
+// framebuffer position (float rounding), which would make a tile differ from the same view
+// rendered alone. The plane comes from a per-triangle buffer indexed by gl_PrimitiveID, and the
+// fragment depth is written from it so the depth test sees the same value in every layout.
+constexpr const char* kSurfaceDepth = R"(
+uniform samplerBuffer planes;     // model-frame plane (n, d) of each triangle: n.x = d
+uniform mat4 model_view;
+uniform vec4 ray;                 // window principal point (x, y) and focal lengths (fx, fy)
+uniform vec2 tile_origin;         // window position of the target's pixel (0, 0)
+uniform vec2 depth_map;           // window depth = depth_map.x / Z + depth_map.y (reversed)
 in float camera_z;
+float surface_z() {
+  vec4 plane = texelFetch(planes, gl_PrimitiveID);
+  vec3 n = mat3(model_view) * plane.xyz;
+  float d = plane.w + dot(n, model_view[3].xyz);
+  vec2 p = gl_FragCoord.xy - tile_origin;
+  vec3 r = vec3((p.x - ray.x) / ray.z, (p.y - ray.y) / ray.w, 1.0);
+  float z = d / dot(n, r);
+  // Grazing or degenerate triangles: the interpolated depth is the better estimate there.
+  if (!(abs(z - camera_z) <= 1e-3 * camera_z)) z = camera_z;
+  gl_FragDepth = depth_map.x / z + depth_map.y;
+  return z;
+}
+)";
+
+const std::string kDepthLabelFragmentShader = std::string(R"(#version 330 core
 uniform uint label;
 layout(location = 0) out float depth_out;
 layout(location = 1) out uint label_out;
+)") + kSurfaceDepth + R"(
 void main() {
-  depth_out = camera_z;
+  depth_out = surface_z();
   label_out = label;
 }
 )";
@@ -119,17 +145,17 @@ void main() {
 // No early_fragment_tests: the image store makes the shader run for hidden fragments too, so
 // the coverage image receives every instance's full silhouette while the depth test keeps the
 // front label.
-constexpr const char* kCoverageFragmentShader = R"(#version 430 core
+const std::string kCoverageFragmentShader = std::string(R"(#version 430 core
 layout(binding = 0, r32ui) uniform uimage2DArray coverage;
 uniform int coverage_layer;
 uniform uint coverage_bit;
 uniform uint label;
-in float camera_z;
 layout(location = 0) out float depth_out;
 layout(location = 1) out uint label_out;
+)") + kSurfaceDepth + R"(
 void main() {
   imageAtomicOr(coverage, ivec3(ivec2(gl_FragCoord.xy), coverage_layer), coverage_bit);
-  depth_out = camera_z;
+  depth_out = surface_z();
   label_out = label;
 }
 )";
@@ -151,11 +177,12 @@ gl::Shader compile(GLenum type, const char* source) {
 struct Program {
   gl::Program program;
   GLint model_view = -1, projection = -1, label = -1, coverage_layer = -1, coverage_bit = -1;
+  GLint ray = -1, tile_origin = -1, depth_map = -1;
 };
 
-Program link(const char* vertex_source, const char* fragment_source) {
+Program link(const char* vertex_source, const std::string& fragment_source) {
   const gl::Shader vertex = compile(GL_VERTEX_SHADER, vertex_source);
-  const gl::Shader fragment = compile(GL_FRAGMENT_SHADER, fragment_source);
+  const gl::Shader fragment = compile(GL_FRAGMENT_SHADER, fragment_source.c_str());
   Program result;
   result.program = gl::Program(glCreateProgram());
   const GLuint program = result.program.get();
@@ -176,6 +203,12 @@ Program link(const char* vertex_source, const char* fragment_source) {
   result.label = glGetUniformLocation(program, "label");
   result.coverage_layer = glGetUniformLocation(program, "coverage_layer");
   result.coverage_bit = glGetUniformLocation(program, "coverage_bit");
+  result.ray = glGetUniformLocation(program, "ray");
+  result.tile_origin = glGetUniformLocation(program, "tile_origin");
+  result.depth_map = glGetUniformLocation(program, "depth_map");
+  glUseProgram(program);
+  glUniform1i(glGetUniformLocation(program, "planes"), 0);  // texture unit 0
+  glUseProgram(0);
   return result;
 }
 
@@ -238,6 +271,8 @@ struct GpuMesh::State {
   gl::VertexArray vertex_array;
   gl::Buffer vertices;
   gl::Buffer indices;
+  gl::Buffer planes;           // per triangle: model-frame unit normal and offset (RGBA32F)
+  gl::Texture planes_texture;  // texture-buffer view of `planes`
   GLsizei index_count = 0;
   std::size_t triangle_count = 0;
   Eigen::AlignedBox3f bounds;
@@ -267,6 +302,13 @@ GpuMesh GpuMesh::upload(const Mesh& mesh) {
       }
     }
   }
+  GLint max_texels = 0;
+  glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+  if (mesh.triangles.size() > static_cast<std::size_t>(max_texels)) {
+    throw RenderError("mesh of " + std::to_string(mesh.triangles.size()) +
+                      " triangles exceeds GL_MAX_TEXTURE_BUFFER_SIZE " +
+                      std::to_string(max_texels) + " of this GL driver; decimate it");
+  }
   GpuMesh gpu;
   State& state = *gpu.state_;
   state.bounds = mesh.bounds();
@@ -288,6 +330,27 @@ GpuMesh GpuMesh::upload(const Mesh& mesh) {
                static_cast<GLsizeiptr>(mesh.triangles.size() * sizeof(mesh.triangles[0])),
                mesh.triangles.data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
+
+  std::vector<Eigen::Vector4f> planes;
+  planes.reserve(mesh.triangles.size());
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d a = mesh.positions[t[0]].cast<double>();
+    const Eigen::Vector3d normal =
+        (mesh.positions[t[1]].cast<double>() - a).cross(mesh.positions[t[2]].cast<double>() - a);
+    const double length = normal.norm();
+    const Eigen::Vector3d unit = length > 0 ? Eigen::Vector3d(normal / length) : normal;
+    planes.emplace_back(static_cast<float>(unit.x()), static_cast<float>(unit.y()),
+                        static_cast<float>(unit.z()), static_cast<float>(unit.dot(a)));
+  }
+  state.planes = gl::make_buffer();
+  glBindBuffer(GL_TEXTURE_BUFFER, state.planes.get());
+  glBufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(planes.size() * sizeof(planes[0])),
+               planes.data(), GL_STATIC_DRAW);
+  state.planes_texture = gl::make_texture();
+  glBindTexture(GL_TEXTURE_BUFFER, state.planes_texture.get());
+  glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, state.planes.get());
+  glBindTexture(GL_TEXTURE_BUFFER, 0);
+  glBindBuffer(GL_TEXTURE_BUFFER, 0);
   check_gl("GpuMesh::upload");
   return gpu;
 }
@@ -359,15 +422,24 @@ struct Renderer::State {
     glClearBufferfv(GL_COLOR, 0, zero_depth);
     glClearBufferuiv(GL_COLOR, 1, zero_label);
     glClearBufferfv(GL_DEPTH, 0, &far_depth);
+    glActiveTexture(GL_TEXTURE0);  // triangle planes
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_GREATER);
     glDepthMask(GL_TRUE);
     glDisable(GL_CULL_FACE);  // the y-down projection flips winding
   }
 
-  void set_projection(const Program& program, const Intrinsics& intrinsics) const {
-    const Matrix4fColumnMajor projection = projection_matrix(intrinsics, zero_to_one_clip);
+  // Sets the target's projection; `origin` is the window position of its pixel (0, 0).
+  void set_projection(const Program& program, const Intrinsics& k, cv::Point origin) const {
+    const Matrix4fColumnMajor projection = projection_matrix(k, zero_to_one_clip);
     glUniformMatrix4fv(program.projection, 1, GL_FALSE, projection.data());
+    const double shift = pixel_shift(k.pixel_center);
+    glUniform4f(program.ray, static_cast<float>(k.cx + shift), static_cast<float>(k.cy + shift),
+                static_cast<float>(k.fx), static_cast<float>(k.fy));
+    glUniform2f(program.tile_origin, static_cast<float>(origin.x), static_cast<float>(origin.y));
+    const double n = k.near_m, f = k.far_m;
+    glUniform2f(program.depth_map, static_cast<float>(n * f / (f - n)),
+                static_cast<float>(-n / (f - n)));
   }
 
   // Draws one instance with `program` bound; `bound_mesh` avoids rebinding the same VAO.
@@ -379,6 +451,7 @@ struct Renderer::State {
     const GpuMesh::State* mesh = instance.mesh->state_.get();
     if (mesh != *bound_mesh) {
       glBindVertexArray(mesh->vertex_array.get());
+      glBindTexture(GL_TEXTURE_BUFFER, mesh->planes_texture.get());  // unit 0
       *bound_mesh = mesh;
     }
     glDrawElements(GL_TRIANGLES, mesh->index_count, GL_UNSIGNED_INT, nullptr);
@@ -439,7 +512,7 @@ DepthLabelImage Renderer::render(const Intrinsics& intrinsics,
   State& state = *state_;
   state.begin(intrinsics.width, intrinsics.height);
   glUseProgram(state.depth_label.program.get());
-  state.set_projection(state.depth_label, intrinsics);
+  state.set_projection(state.depth_label, intrinsics, {0, 0});
   const GpuMesh::State* bound = nullptr;
   for (const auto& instance : instances) {
     State::draw(state.depth_label, instance, instance.label, &bound);
@@ -469,7 +542,7 @@ TileAtlas Renderer::render_tiles(const std::vector<TileRequest>& requests) {
     const cv::Rect& rect = result.rects[i];
     glViewport(rect.x, rect.y, rect.width, rect.height);
     glScissor(rect.x, rect.y, rect.width, rect.height);
-    state.set_projection(program, requests[i].intrinsics);
+    state.set_projection(program, requests[i].intrinsics, rect.tl());
     State::draw(program, requests[i].instance, requests[i].instance.label, &bound);
   }
   result.atlas = state.read(0, 0, atlas_size.width, atlas_size.height);
@@ -670,7 +743,7 @@ std::vector<InstanceCounts> Renderer::count_visibility(const Intrinsics& intrins
   state.begin(region.width, region.height);
   const Program& program = state.coverage;
   glUseProgram(program.program.get());
-  state.set_projection(program, target);
+  state.set_projection(program, target, {0, 0});
   const GpuMesh::State* bound = nullptr;
   for (std::size_t i = 0; i < instances.size(); ++i) {
     glUniform1i(program.coverage_layer, static_cast<GLint>(i / 32));
