@@ -149,9 +149,28 @@ BatchJob fake_job(const fs::path& out_dir, const FakeJobOptions& options) {
   return job;
 }
 
+namespace {
+
+fs::path test_root() {
+  return fs::path(::testing::TempDir()) / ("clutterscope_tools_" + std::to_string(::getpid()));
+}
+
+// Removes every fresh_dir() of this test process when the tests end.
+class RemoveTestFolders : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    std::error_code ignored;
+    fs::remove_all(test_root(), ignored);
+  }
+};
+
+[[maybe_unused]] ::testing::Environment* const remove_test_folders =
+    ::testing::AddGlobalTestEnvironment(new RemoveTestFolders);
+
+}  // namespace
+
 fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::path(::testing::TempDir()) /
-                       ("clutterscope_tools_" + std::to_string(::getpid()) + "_" + name);
+  const fs::path dir = test_root() / name;
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

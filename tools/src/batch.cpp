@@ -75,11 +75,17 @@ struct WorkQueue {
   std::atomic<std::size_t> next{0};
   std::atomic<bool> stop{false};
   std::atomic<std::size_t> failed{0};
-  std::mutex error_mutex;
+  std::mutex mutex;  // guards first_error and item_seconds
   std::exception_ptr first_error;
+  double item_seconds = 0.0;  // summed over items, for the mean time per image
+
+  void add_item_seconds(double seconds) {
+    std::lock_guard<std::mutex> lock(mutex);
+    item_seconds += seconds;
+  }
 
   void abort(std::exception_ptr error) {
-    std::lock_guard<std::mutex> lock(error_mutex);
+    std::lock_guard<std::mutex> lock(mutex);
     if (!first_error) first_error = std::move(error);
     stop = true;
   }
@@ -116,9 +122,9 @@ void run_worker(const BatchJob& job, const BatchOptions& options, WorkQueue& que
         write_failed_part(options.out_dir, key, *failure);
         ++queue.failed;
       } else {
-        const double seconds =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        write_ok_part(options.out_dir, key, output, seconds);
+        write_ok_part(options.out_dir, key, output);
+        queue.add_item_seconds(
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
       }
       progress.item_done();
     } catch (...) {
@@ -143,6 +149,7 @@ void write_run_json(const fs::path& out_dir, const std::string& command,
       {"failed", result.failed},
       {"complete", result.complete},
       {"seconds", json_rounded(result.seconds, 3)},
+      {"seconds_per_image", json_rounded(result.seconds_per_item, 6)},
       {"images_per_second",
        result.seconds > 0 ? json_rounded(result.computed / result.seconds, 3) : nullptr},
       {"tool_version", CLUTTERSCOPE_VERSION}};
@@ -248,7 +255,14 @@ BatchResult run_batch(const BatchJob& job, const BatchOptions& options) {
     result.failed = totals.failures.size();
   }
   result.seconds = progress.elapsed_seconds();
+  if (result.computed > 0) result.seconds_per_item = queue.item_seconds / result.computed;
   progress.finish(result.failed);
+  if (!result.complete && !options.quiet) {
+    std::fprintf(stderr,
+                 "shard %d/%d done; when every shard has run, combine the folders with "
+                 "`clutterscope merge DIR... --out DIR`\n",
+                 options.shard->index, options.shard->count);
+  }
   write_run_json(options.out_dir, job.output->command, options, in_scope, result);
   return result;
 }

@@ -151,14 +151,11 @@ fs::path part_path(const fs::path& out_dir, const ImageKey& key, PartKind kind) 
          (six_digits(key.im_id) + (kind == PartKind::kOk ? ".json" : ".failed.json"));
 }
 
-void write_ok_part(const fs::path& out_dir, const ImageKey& key, const ItemOutput& output,
-                   double seconds) {
+void write_ok_part(const fs::path& out_dir, const ImageKey& key, const ItemOutput& output) {
   const fs::path path = part_path(out_dir, key, PartKind::kOk);
   fs::create_directories(path.parent_path());
-  const nlohmann::json part = {{"tables", output.tables},
-                               {"summary", output.summary},
-                               {"files", output.files},
-                               {"seconds", json_rounded(seconds, 6)}};
+  const nlohmann::json part = {
+      {"tables", output.tables}, {"summary", output.summary}, {"files", output.files}};
   write_text_atomically(path, part.dump() + "\n");
   std::error_code ignored;
   fs::remove(part_path(out_dir, key, PartKind::kFailed), ignored);

@@ -20,7 +20,7 @@ std::filesystem::path part_path(const std::filesystem::path& out_dir, const data
                                 PartKind kind);
 // Persists one finished item atomically; an ok part replaces an earlier failed one.
 void write_ok_part(const std::filesystem::path& out_dir, const datasets::ImageKey& key,
-                   const ItemOutput& output, double seconds);
+                   const ItemOutput& output);
 void write_failed_part(const std::filesystem::path& out_dir, const datasets::ImageKey& key,
                        const std::string& message);
 

@@ -13,7 +13,8 @@
 //
 // Layout of OUT:
 //   <table files>, summary.json  final outputs, written only when the whole job is complete
-//   run.json                     this run's timing, jobs and counts (not deterministic)
+//   run.json                     this run's timing, jobs and counts (differs between runs, so
+//                                it is kept out of summary.json, which is byte-reproducible)
 //   .batch/job.json              fingerprint of the job; a different job into OUT is refused
 //   .batch/items.tsv             the job's full item list (split, scene, image), all shards
 //   .batch/shard-I-of-N.json     written when shard I of N finished its items
@@ -151,11 +152,12 @@ struct BatchJob {
 };
 
 struct BatchResult {
-  bool complete = false;     // final files written (false for a shard run)
-  std::size_t computed = 0;  // items processed by this run
-  std::size_t resumed = 0;   // items found finished from an earlier run
-  std::size_t failed = 0;    // failed items in the whole job (or this shard)
-  double seconds = 0.0;      // wall time of this run
+  bool complete = false;          // final files written (false for a shard run)
+  std::size_t computed = 0;       // items processed by this run
+  std::size_t resumed = 0;        // items found finished from an earlier run
+  std::size_t failed = 0;         // failed items in the whole job (or this shard)
+  double seconds = 0.0;           // wall time of this run
+  double seconds_per_item = 0.0;  // mean time of the per-item function, over computed items
   int exit_code() const { return failed > 0 ? 1 : 0; }
 };
 
