@@ -227,6 +227,34 @@ TEST_F(ReportHtml, ThresholdsOnAFolderWithoutEstimatesSaysWhatToRun) {
   EXPECT_EQ(load_report_objects(dir_).size(), rows.size());
 }
 
+TEST_F(ReportHtml, ThresholdCheckReadsTheReportFolder) {
+  const auto rows = testing::synthetic_dataset(6);
+  ReportOptions options;
+  options.accurate_cm = 2.0;
+  options.bootstrap.resamples = 200;
+  const ReportAnalysis analysis = analyse_report(rows, {}, options);
+  write_report(dir_, rows, analysis, {}, run_record());
+  ThresholdCheckOptions check;
+  check.report_dir = dir_;
+  check.variance_cm2 = 0.5;
+  // The report's --accurate-cm is the default.
+  EXPECT_EQ(threshold_check(check), format_threshold_check(rows, 0.5, 0.3, 2.0));
+  check.accurate_cm = 1.5;
+  check.visibility_cutoff = 0.4;
+  EXPECT_EQ(threshold_check(check), format_threshold_check(rows, 0.5, 0.4, 1.5));
+  check.variance_cm2 = -1;
+  try {
+    threshold_check(check);
+    FAIL() << "expected invalid_argument";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("--variance-cm2"), std::string::npos);
+  }
+  check.variance_cm2 = 0.5;
+  check.accurate_cm.reset();
+  testing::write_text(dir_ / "summary.json", "{\"options\": {}}");
+  EXPECT_THROW(threshold_check(check), datasets::DatasetError);
+}
+
 TEST_F(ReportHtml, InvalidOptionsAreRefusedWithTheOptionName) {
   ReportOptions options;
   options.accurate_cm = -1;

@@ -122,6 +122,26 @@ TEST(ReportStatistics, BootstrapOfExactlyLinearDataIsAPointInterval) {
   EXPECT_NEAR(result.interval->high, -1.0, 1e-12);
 }
 
+TEST(ReportStatistics, BootstrapResamplesAreCappedForLargeTables) {
+  BootstrapOptions options;  // 2000 resamples, 1e8 draws
+  EXPECT_EQ(bootstrap_resamples(options, 1000), 2000);
+  EXPECT_EQ(bootstrap_resamples(options, 100000), 1000);
+  EXPECT_EQ(bootstrap_resamples(options, 10000000), kMinBootstrapResamples);
+  options.resamples = 150;
+  EXPECT_EQ(bootstrap_resamples(options, 10000000), 150);
+  options = {};
+  options.max_draws = 40 * 300;
+  std::vector<double> x, y;
+  for (int i = 0; i < 40; ++i) {
+    x.push_back(i);
+    y.push_back((i * 7) % 11);
+  }
+  std::mt19937_64 rng(1);
+  const auto result = bootstrap_correlation(x, y, CorrelationKind::kSpearman, options, rng);
+  EXPECT_EQ(result.resamples_used, 300);
+  EXPECT_EQ(result.resamples_defined, 300);
+}
+
 TEST(ReportStatistics, BootstrapOfUndefinedCorrelationHasNoInterval) {
   std::mt19937_64 rng(1);
   const auto few = bootstrap_correlation({1, 2}, {2, 1}, CorrelationKind::kSpearman, {}, rng);

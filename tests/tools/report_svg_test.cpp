@@ -112,6 +112,18 @@ TEST_F(ReportSvg, Base64MatchesRfc4648Vectors) {
   EXPECT_EQ(svg::base64(std::string("\xff\xfe\x00", 3)), "//4A");
 }
 
+TEST_F(ReportSvg, ProjectionUsesThePinholeModelAndDropsPointsBehindTheCamera) {
+  Eigen::Matrix3d K;
+  K << 500, 0, 320, 0, 400, 240, 0, 0, 1;
+  const auto pixels =
+      svg::project_to_pixels(K, {{0, 0, 1}, {0.1, -0.2, 2}, {0.1, 0.1, -1}, {0.3, 0.3, 0}});
+  ASSERT_EQ(pixels.size(), 2u);
+  EXPECT_DOUBLE_EQ(pixels[0][0], 320);
+  EXPECT_DOUBLE_EQ(pixels[0][1], 240);
+  EXPECT_DOUBLE_EQ(pixels[1][0], 320 + 500 * 0.05);
+  EXPECT_DOUBLE_EQ(pixels[1][1], 240 - 400 * 0.1);
+}
+
 TEST_F(ReportSvg, ImagePanelsEmbedThePngAndDrawEachObject) {
   cv::Mat raster(60, 80, CV_8UC3, cv::Scalar(40, 80, 120));
   const svg::BackgroundImage background = svg::BackgroundImage::from_raster(raster);

@@ -47,7 +47,7 @@ Json correlation_json(const CorrelationWithInterval& c, const BootstrapOptions& 
     json["interval"] = nullptr;
   }
   json["confidence"] = bootstrap.confidence;
-  json["resamples"] = bootstrap.resamples;
+  json["resamples"] = c.resamples_used;
   json["resamples_defined"] = c.resamples_defined;
   json["undefined_reason"] =
       c.estimate.defined() ? Json(nullptr) : Json(c.estimate.undefined_reason);
@@ -473,9 +473,11 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
   out << "<section id=\"correlations\">\n<h2>Correlation with visibility</h2>\n"
       << "<p>Correlation of each quantity with object visibility V<sub>i</sub>; "
       << fixed(100.0 * options.bootstrap.confidence, 0) << "% bootstrap percentile intervals "
-      << "from " << options.bootstrap.resamples << " resamples. A negative value means the "
+      << "(resamples per interval in the last column). A negative value means the "
       << "quantity grows as visibility drops.</p>\n<table>\n<tr><th class=\"text\">quantity</th>"
-      << "<th class=\"text\">method</th><th>n</th><th>value</th><th>interval</th></tr>\n";
+      << "<th "
+         "class=\"text\">method</th><th>n</th><th>value</th><th>interval</th><th>resamples</th></"
+         "tr>\n";
   for (const CorrelationPair* pair :
        {&analysis.variance_correlation, &analysis.error_correlation}) {
     const std::string quantity = pair == &analysis.variance_correlation
@@ -485,7 +487,8 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
       out << "<tr><td class=\"text\">" << quantity << "</td><td class=\"text\">"
           << (corr->kind == CorrelationKind::kPearson ? "Pearson" : "Spearman") << "</td><td>"
           << corr->n << "</td>" << cell(corr->estimate) << "<td>"
-          << html_escape(interval_text(*corr)) << "</td></tr>\n";
+          << html_escape(interval_text(*corr)) << "</td><td>" << corr->resamples_used
+          << "</td></tr>\n";
     }
   }
   out << "</table>\n</section>\n";
@@ -628,6 +631,47 @@ std::vector<ObjectRow> load_report_objects(const std::filesystem::path& dir) {
                                      dir.string() + "` to estimate poses first");
   }
   return objects;
+}
+
+bool ThresholdCheckOptions::IsValid(std::string* why) const {
+  ThresholdOptions thresholds;
+  thresholds.chosen_threshold_cm2 = variance_cm2;
+  thresholds.visibility_cutoff = visibility_cutoff;
+  if (accurate_cm) thresholds.accurate_cm = *accurate_cm;
+  if (!thresholds.IsValid(why)) {
+    // Name this command's option, not the report's.
+    const std::string report_name = "--variance-threshold-cm2";
+    const size_t at = why->find(report_name);
+    if (at != std::string::npos) why->replace(at, report_name.size(), "--variance-cm2");
+    return false;
+  }
+  return true;
+}
+
+std::string threshold_check(const ThresholdCheckOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument(why);
+  const std::vector<ObjectRow> objects = load_report_objects(options.report_dir);
+  double accurate_cm = 1.0;
+  const std::filesystem::path summary = options.report_dir / "summary.json";
+  if (options.accurate_cm) {
+    accurate_cm = *options.accurate_cm;
+  } else if (std::filesystem::exists(summary)) {
+    std::ifstream in(summary);
+    const nlohmann::json json = nlohmann::json::parse(in, nullptr, false);
+    const auto* value = json.is_object() && json.contains("options") && json["options"].is_object()
+                            ? &json["options"]
+                            : nullptr;
+    if (!value || !value->contains("accurate_cm") || !(*value)["accurate_cm"].is_number() ||
+        !((*value)["accurate_cm"].get<double>() > 0.0)) {
+      throw datasets::DatasetError(summary,
+                                   "options.accurate_cm: missing or not a positive "
+                                   "number (pass --accurate-cm)");
+    }
+    accurate_cm = (*value)["accurate_cm"].get<double>();
+  }
+  return format_threshold_check(objects, options.variance_cm2, options.visibility_cutoff,
+                                accurate_cm);
 }
 
 }  // namespace clutterscope::tools::report

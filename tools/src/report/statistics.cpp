@@ -121,7 +121,17 @@ bool BootstrapOptions::IsValid(std::string* why) const {
     *why = "bootstrap confidence must be in (0, 1), got " + std::to_string(confidence);
     return false;
   }
+  if (max_draws < 1) {
+    *why = "bootstrap max_draws must be >= 1, got " + std::to_string(max_draws);
+    return false;
+  }
   return true;
+}
+
+int bootstrap_resamples(const BootstrapOptions& options, size_t n) {
+  const long long affordable = options.max_draws / static_cast<long long>(std::max<size_t>(n, 1));
+  const long long minimum = std::min<long long>(options.resamples, kMinBootstrapResamples);
+  return static_cast<int>(std::max(minimum, std::min<long long>(options.resamples, affordable)));
 }
 
 CorrelationWithInterval bootstrap_correlation(const std::vector<double>& x,
@@ -138,9 +148,10 @@ CorrelationWithInterval bootstrap_correlation(const std::vector<double>& x,
   }
   const size_t n = x.size();
   std::vector<double> resampled;
-  resampled.reserve(options.resamples);
+  result.resamples_used = bootstrap_resamples(options, n);
+  resampled.reserve(result.resamples_used);
   std::vector<double> rx(n), ry(n);
-  for (int r = 0; r < options.resamples; ++r) {
+  for (int r = 0; r < result.resamples_used; ++r) {
     for (size_t i = 0; i < n; ++i) {
       // Plain modulo rather than std::uniform_int_distribution, whose algorithm differs
       // between standard libraries: the same seed gives the same interval everywhere. The
@@ -153,9 +164,9 @@ CorrelationWithInterval bootstrap_correlation(const std::vector<double>& x,
     if (value.defined()) resampled.push_back(*value.value);
   }
   result.resamples_defined = static_cast<int>(resampled.size());
-  if (result.resamples_defined < kMinDefinedResampleShare * options.resamples) {
+  if (result.resamples_defined < kMinDefinedResampleShare * result.resamples_used) {
     result.interval_undefined_reason = "only " + std::to_string(result.resamples_defined) + " of " +
-                                       std::to_string(options.resamples) +
+                                       std::to_string(result.resamples_used) +
                                        " bootstrap resamples have a defined correlation";
     return result;
   }

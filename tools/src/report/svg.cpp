@@ -542,6 +542,17 @@ std::string base64(const std::string& bytes) {
   return out;
 }
 
+std::vector<std::array<double, 2>> project_to_pixels(const Eigen::Matrix3d& K,
+                                                     const std::vector<Eigen::Vector3d>& points) {
+  std::vector<std::array<double, 2>> pixels;
+  pixels.reserve(points.size());
+  for (const Eigen::Vector3d& p : points) {
+    if (!(p.z() > 0.0)) continue;
+    pixels.push_back({K(0, 0) * p.x() / p.z() + K(0, 2), K(1, 1) * p.y() / p.z() + K(1, 2)});
+  }
+  return pixels;
+}
+
 std::string image_panels(const std::string& title, const BackgroundImage& background,
                          const std::vector<ImagePanel>& panels, int panel_width) {
   if (background.width <= 0 || background.height <= 0) {

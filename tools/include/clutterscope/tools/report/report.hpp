@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -125,5 +126,20 @@ ReportFiles write_report(const std::filesystem::path& dir, const std::vector<Obj
 // datasets::DatasetError saying what to run when the folder has no objects.csv or no
 // estimates in it.
 std::vector<ObjectRow> load_report_objects(const std::filesystem::path& dir);
+
+// `clutterscope thresholds DIR --variance-cm2 T [--visibility-cutoff C] [--accurate-cm A]`.
+struct ThresholdCheckOptions {
+  std::filesystem::path report_dir;
+  double variance_cm2 = kPaperVarianceThresholdCm2;
+  double visibility_cutoff = 0.3;
+  std::optional<double> accurate_cm;  // default: the report's (summary.json), else 1 cm
+  bool IsValid(std::string* why) const;
+};
+
+// The threshold check of an existing report folder as printed by `clutterscope thresholds`
+// (format_threshold_check over DIR/objects.csv). Throws std::invalid_argument for invalid
+// options and datasets::DatasetError for a folder without estimates (saying what to run) or
+// a malformed summary.json.
+std::string threshold_check(const ThresholdCheckOptions& options);
 
 }  // namespace clutterscope::tools::report

@@ -48,6 +48,11 @@ const char* to_string(CorrelationKind kind);
 
 struct BootstrapOptions {
   int resamples = 2000;
+  // Work cap for large tables: at most this many pair draws per interval, so the resample
+  // count drops (never below kMinBootstrapResamples) once n * resamples exceeds it. With
+  // hundreds of thousands of objects the interval is narrow and a few hundred resamples
+  // resolve it.
+  long long max_draws = 100'000'000;
   double confidence = 0.95;
   bool IsValid(std::string* why) const;
 };
@@ -63,14 +68,21 @@ struct CorrelationWithInterval {
   Statistic estimate;  // on the full sample
   std::optional<Interval> interval;
   std::string interval_undefined_reason;  // empty iff interval is set
+  int resamples_used = 0;                 // after the max_draws cap
   int resamples_defined = 0;              // resamples whose correlation was defined
 };
 
-// The correlation and its bootstrap percentile interval: `resamples` resamples of the pairs
-// with replacement, drawn from `rng` (deterministic for a given seed and input), the
-// interval being the (1 - confidence)/2 and (1 + confidence)/2 quantiles of the resampled
-// correlations. Resamples where the correlation is undefined (all draws tied) are left out;
-// the interval is undefined when the estimate is, or fewer than 90% of resamples are defined.
+constexpr int kMinBootstrapResamples = 200;
+
+// Resamples drawn for n pairs: options.resamples, capped by max_draws / n but at least
+// kMinBootstrapResamples (or options.resamples when that is smaller).
+int bootstrap_resamples(const BootstrapOptions& options, size_t n);
+
+// The correlation and its bootstrap percentile interval: bootstrap_resamples() resamples of the
+// pairs with replacement, drawn from `rng` (deterministic for a given seed and input), the interval
+// being the (1 - confidence)/2 and (1 + confidence)/2 quantiles of the resampled correlations.
+// Resamples where the correlation is undefined (all draws tied) are left out; the interval is
+// undefined when the estimate is, or fewer than 90% of resamples are defined.
 CorrelationWithInterval bootstrap_correlation(const std::vector<double>& x,
                                               const std::vector<double>& y, CorrelationKind kind,
                                               const BootstrapOptions& options,

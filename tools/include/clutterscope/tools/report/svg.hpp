@@ -6,6 +6,7 @@
 // charts, and images with projected points. Output is deterministic text (fixed decimals), a
 // bare <svg> element with its namespace, fit for inlining in HTML or saving as a file.
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <filesystem>
@@ -119,6 +120,13 @@ struct ProjectedObject {
   std::vector<std::array<double, 2>> points;      // belief samples, drawn as dots
   std::optional<std::array<double, 2>> estimate;  // final estimate, drawn as a ringed cross
 };
+
+// Projects camera-frame points (metres, OpenCV pinhole) to image pixel coordinates with K:
+// (u, v) = (fx x / z + cx, fy y / z + cy). Under the default pixel-centre convention (DESIGN
+// §3), pixel (i, j) covers [i, i + 1) x [j, j + 1), exactly the SVG image's coordinates, so no
+// shift is applied. Points with z <= 0 (behind the camera) are dropped.
+std::vector<std::array<double, 2>> project_to_pixels(const Eigen::Matrix3d& K,
+                                                     const std::vector<Eigen::Vector3d>& points);
 
 // One panel: the image with every object's points (e.g. "initial beliefs", "iteration 15",
 // "final estimates" as in the paper's Fig. 2 d-f and Fig. 3).
