@@ -17,9 +17,8 @@ bool non_contact(const Eigen::Vector3d& xs, const Eigen::Vector3d& xt,
   return delta.x() > half_sum.x() || delta.y() > half_sum.y() || delta.z() > half_sum.z();
 }
 
-bool supports(const Eigen::Vector3d& xs, const Eigen::Vector3d& xt,
-              const Eigen::Vector3d& extent_s, const Eigen::Vector3d& extent_t,
-              double contact_tolerance) {
+bool supports(const Eigen::Vector3d& xs, const Eigen::Vector3d& xt, const Eigen::Vector3d& extent_s,
+              const Eigen::Vector3d& extent_t, double contact_tolerance) {
   const double height = xt.z() - xs.z();
   return std::abs(xs.x() - xt.x()) < 0.5 * extent_s.x() &&
          std::abs(xs.y() - xt.y()) < 0.5 * extent_s.y() &&

@@ -61,8 +61,7 @@ TEST(Potentials, Eq9SupportedByOnBothSidesOfEachInequality) {
   EXPECT_FALSE(supported_by(xt + Eigen::Vector3d(0.04 + kEps, 0, on_top), xt, kBoxS, kBoxT, tol));
   EXPECT_TRUE(supported_by(xt + Eigen::Vector3d(0, 0.02 - kEps, on_top), xt, kBoxS, kBoxT, tol));
   EXPECT_FALSE(supported_by(xt + Eigen::Vector3d(0, 0.02 + kEps, on_top), xt, kBoxS, kBoxT, tol));
-  EXPECT_TRUE(
-      supported_by(xt + Eigen::Vector3d(0, 0, on_top - tol + kEps), xt, kBoxS, kBoxT, tol));
+  EXPECT_TRUE(supported_by(xt + Eigen::Vector3d(0, 0, on_top - tol + kEps), xt, kBoxS, kBoxT, tol));
   EXPECT_FALSE(
       supported_by(xt + Eigen::Vector3d(0, 0, on_top - tol - kEps), xt, kBoxS, kBoxT, tol));
   EXPECT_FALSE(
@@ -99,8 +98,7 @@ TEST(Potentials, SupportSamplerParentGivenChild) {
   std::mt19937_64 rng(18);
   Eigen::MatrixXd parents;
   psi.sample(EdgeDirection::kSecondToFirst, child.replicate(1, 20000), rng, &parents);
-  expect_moments(parents, child - Eigen::Vector3d(0, 0, 0.03),
-                 Eigen::Vector3d(0.04, 0.02, 0.002));
+  expect_moments(parents, child - Eigen::Vector3d(0, 0, 0.03), Eigen::Vector3d(0.04, 0.02, 0.002));
 }
 
 TEST(Potentials, NonContactFactorIsWeightedFreeFraction) {

@@ -24,9 +24,8 @@ bool non_contact(const Eigen::Vector3d& xs, const Eigen::Vector3d& xt,
 // |(x_t^z - x_s^z) - (d_s^z + d_t^z) / 2| < contact_tolerance (the paper's Delta d). The paper
 // writes |dz|; we use the signed height of t above s, so that t hanging under s is not
 // "supported" (the same as the paper whenever t is above s).
-bool supports(const Eigen::Vector3d& xs, const Eigen::Vector3d& xt,
-              const Eigen::Vector3d& extent_s, const Eigen::Vector3d& extent_t,
-              double contact_tolerance);
+bool supports(const Eigen::Vector3d& xs, const Eigen::Vector3d& xt, const Eigen::Vector3d& extent_s,
+              const Eigen::Vector3d& extent_t, double contact_tolerance);
 
 // Eq. 9: object t supports object s (s rests on t): Eq. 8 with the roles exchanged, i.e.
 // |dx| < d_t^x / 2, |dy| < d_t^y / 2, |(x_s^z - x_t^z) - (d_s^z + d_t^z) / 2| < tolerance.

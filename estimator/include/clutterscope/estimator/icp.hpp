@@ -1,0 +1,73 @@
+#pragma once
+
+// Post-processing of a belief (Alg. 3 step 3): K belief samples are each refined by ICP of the
+// object model against the observed points, the fits are fused into one estimate, and the
+// estimate is confident iff every axis of its weighted variance is at most a threshold.
+//
+// The orientation is known (d = 3, from the GT), so ICP solves for the translation only:
+// point-to-plane (model normals by PCA of neighbouring model points) with a small
+// point-to-point term, from each observed point to its nearest model point (a nanoflann k-d
+// tree over the model points, built once per object and reused for every fit). Correspondences
+// farther than max_correspondence_distance are ignored, so points of other objects and of the
+// table in the detection box do not pull the fit. All points in one frame (metres).
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace clutterscope::estimator {
+
+struct IcpOptions {
+  int max_iterations = 50;
+  double max_correspondence_distance = 0.02;  // metres
+  double convergence_step = 1e-6;             // stop when the update is shorter (metres)
+  int min_correspondences = 10;
+  bool IsValid(std::string* why) const;
+};
+
+struct IcpResult {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // the refined object position
+  double rms_distance = 0;                             // over the final correspondences
+  int correspondences = 0;
+  int iterations = 0;
+  bool converged = false;  // step below convergence_step with enough correspondences
+};
+
+class TranslationIcp {
+ public:
+  // model_points: 3 x N surface points of the model, already rotated into the frame of the
+  // observation and expressed relative to the object position (x_s), so that the model placed
+  // at position p occupies model_points + p.
+  TranslationIcp(Eigen::Matrix3Xd model_points, const IcpOptions& options);
+  ~TranslationIcp();
+  TranslationIcp(TranslationIcp&&) noexcept;
+  TranslationIcp& operator=(TranslationIcp&&) noexcept;
+  TranslationIcp(const TranslationIcp&) = delete;
+  TranslationIcp& operator=(const TranslationIcp&) = delete;
+
+  // Refines `initial` against the observed points (3 x K). Without enough correspondences the
+  // result keeps the last position and converged = false.
+  IcpResult align(const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& initial) const;
+
+ private:
+  struct Tree;
+  std::unique_ptr<Tree> tree_;
+  IcpOptions options_;
+};
+
+struct FusedEstimate {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  Eigen::Vector3d variance = Eigen::Vector3d::Zero();  // weighted, per axis (metres^2)
+  Eigen::VectorXd weights;                             // one per fit, sum 1
+  bool confident = false;
+};
+
+// Fuses K >= 1 fits as the paper does: D_k = sum_j |f_k - f_j|, normalised to sum 1 over k,
+// weight_k ∝ 1 - D_k (equal weights when all fits coincide or K = 1); weighted mean and
+// per-axis weighted variance; confident iff every axis variance <= variance_threshold (m^2,
+// 2.5e-5 = 0.25 cm^2 in the paper). Throws std::invalid_argument for no fits, non-finite fits
+// or a threshold <= 0.
+FusedEstimate fuse_fits(const std::vector<Eigen::Vector3d>& fits, double variance_threshold);
+
+}  // namespace clutterscope::estimator

@@ -1,0 +1,106 @@
+#include "clutterscope/estimator/icp.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace clutterscope::estimator {
+namespace {
+
+// Points on the surface of an axis-aligned box centred at the origin; with visible_only, only
+// the three faces an oblique camera sees (top +z, front -y, side +x), as a depth sensor
+// sees them.
+Eigen::Matrix3Xd box_surface(const Eigen::Vector3d& size, int per_face, bool visible_only,
+                             std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  std::vector<Eigen::Vector3d> points;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int side : {-1, 1}) {
+      if (visible_only &&
+          !((axis == 2 && side == 1) || (axis == 1 && side == -1) || (axis == 0 && side == 1)))
+        continue;
+      for (int i = 0; i < per_face; ++i) {
+        Eigen::Vector3d p(u(rng) * size.x(), u(rng) * size.y(), u(rng) * size.z());
+        p[axis] = 0.5 * side * size[axis];
+        points.push_back(p);
+      }
+    }
+  }
+  Eigen::Matrix3Xd m(3, points.size());
+  for (size_t i = 0; i < points.size(); ++i) m.col(i) = points[i];
+  return m;
+}
+
+TEST(Icp, RecoversKnownShiftOfPartiallySeenBoxWithClutter) {
+  std::mt19937_64 rng(8);
+  const Eigen::Vector3d size(0.10, 0.06, 0.04);
+  const Eigen::Vector3d truth(0.31, -0.12, 0.72);
+  Eigen::Matrix3Xd seen = box_surface(size, 300, true, rng);
+  std::normal_distribution<double> noise(0, 0.0005);
+  for (int i = 0; i < seen.cols(); ++i)
+    seen.col(i) += truth + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+  // Other objects in the detection box, far from the model: must not pull the fit.
+  Eigen::Matrix3Xd observed(3, seen.cols() + 100);
+  observed.leftCols(seen.cols()) = seen;
+  for (int i = 0; i < 100; ++i)
+    observed.col(seen.cols() + i) = truth + Eigen::Vector3d(0.2 + 0.001 * i, 0.1, 0.0);
+  const TranslationIcp icp(box_surface(size, 2000, false, rng), IcpOptions{});
+  for (const Eigen::Vector3d& start :
+       {Eigen::Vector3d(0.008, -0.006, 0.005), Eigen::Vector3d(-0.01, 0.004, -0.007)}) {
+    const IcpResult fit = icp.align(observed, truth + start);
+    EXPECT_TRUE(fit.converged);
+    EXPECT_LT((fit.position - truth).norm(), 0.001) << fit.position.transpose();
+    EXPECT_LT(fit.rms_distance, 0.002);
+    EXPECT_EQ(fit.correspondences, seen.cols());
+  }
+}
+
+TEST(Icp, TooFewCorrespondencesIsNotConverged) {
+  std::mt19937_64 rng(9);
+  const TranslationIcp icp(box_surface(Eigen::Vector3d(0.1, 0.1, 0.1), 100, false, rng),
+                           IcpOptions{});
+  const Eigen::Matrix3Xd far = Eigen::Matrix3Xd::Constant(3, 50, 5.0);
+  const IcpResult fit = icp.align(far, Eigen::Vector3d::Zero());
+  EXPECT_FALSE(fit.converged);
+  EXPECT_TRUE(fit.position.allFinite());
+  EXPECT_EQ(fit.position, Eigen::Vector3d::Zero());
+}
+
+TEST(Icp, FuseFitsMatchesHandComputedWeights) {
+  // Distances: D = (4, 3, 5) mm, sum 12; weights ∝ (8, 9, 7)/12 -> (1/3, 3/8, 7/24).
+  const std::vector<Eigen::Vector3d> fits = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.001, 0, 0),
+                                             Eigen::Vector3d(0.003, 0, 0)};
+  const FusedEstimate e = fuse_fits(fits, 2.5e-5);
+  EXPECT_NEAR(e.weights[0], 1.0 / 3, 1e-12);
+  EXPECT_NEAR(e.weights[1], 3.0 / 8, 1e-12);
+  EXPECT_NEAR(e.weights[2], 7.0 / 24, 1e-12);
+  EXPECT_NEAR(e.mean.x(), 1.25e-3, 1e-12);
+  EXPECT_NEAR(e.variance.x(), 1.4375e-6, 1e-15);
+  EXPECT_EQ(e.variance.y(), 0.0);
+  EXPECT_TRUE(e.confident);
+  // The same fits 10x spread: variance 1.4375e-4 > 2.5e-5 on x -> not confident.
+  const FusedEstimate wide = fuse_fits({fits[0], 10 * fits[1], 10 * fits[2]}, 2.5e-5);
+  EXPECT_FALSE(wide.confident);
+  // Threshold exactly at the variance: confident (<=).
+  EXPECT_TRUE(fuse_fits(fits, 1.4375e-6 + 1e-18).confident);
+}
+
+TEST(Icp, FuseFitsEdgeCasesAndBadInput) {
+  const FusedEstimate one = fuse_fits({Eigen::Vector3d(1, 2, 3)}, 1e-6);
+  EXPECT_EQ(one.mean, Eigen::Vector3d(1, 2, 3));
+  EXPECT_TRUE(one.confident);
+  const FusedEstimate same = fuse_fits({Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(1, 2, 3)}, 1e-6);
+  EXPECT_DOUBLE_EQ(same.weights[0], 0.5);
+  EXPECT_THROW(fuse_fits({}, 1e-6), std::invalid_argument);
+  EXPECT_THROW(fuse_fits({Eigen::Vector3d::Zero()}, 0.0), std::invalid_argument);
+  EXPECT_THROW(fuse_fits({Eigen::Vector3d::Zero()}, -1.0), std::invalid_argument);
+  EXPECT_THROW(fuse_fits({Eigen::Vector3d(NAN, 0, 0)}, 1e-6), std::invalid_argument);
+  IcpOptions bad;
+  bad.max_correspondence_distance = 0;
+  std::string why;
+  EXPECT_FALSE(bad.IsValid(&why));
+  EXPECT_NE(why.find("max_correspondence_distance"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace clutterscope::estimator
