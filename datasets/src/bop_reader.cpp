@@ -126,6 +126,75 @@ SceneGraph parse_graph(const Json& entry, int count, const FieldContext& context
   return graph;
 }
 
+// Camera of one scene_camera.json entry; the image size comes from the caller.
+Camera parse_camera(const Json& entry, double default_depth_scale, const FieldContext& context) {
+  Camera camera;
+  camera.K =
+      detail::row_major_matrix(detail::require_field(entry, "cam_K", context), "cam_K", context);
+  if (camera.fx() <= 0 || camera.fy() <= 0) context.fail("cam_K must have positive fx and fy");
+  if ((camera.K.row(2) - Eigen::RowVector3d(0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9) {
+    context.fail("cam_K's last row must be [0, 0, 1]");
+  }
+  camera.depth_scale = default_depth_scale;
+  const auto scale = entry.find("depth_scale");
+  if (scale != entry.end()) {
+    camera.depth_scale = detail::finite_number(*scale, "depth_scale", context);
+    if (camera.depth_scale <= 0) context.fail("depth_scale must be positive");
+  }
+  const bool has_r = entry.contains("cam_R_w2c");
+  const bool has_t = entry.contains("cam_t_w2c");
+  if (has_r != has_t) context.fail("cam_R_w2c and cam_t_w2c must be given together");
+  if (has_r) {
+    Eigen::Isometry3d world_to_camera = Eigen::Isometry3d::Identity();
+    world_to_camera.linear() = detail::rotation(entry["cam_R_w2c"], "cam_R_w2c", context);
+    world_to_camera.translation() =
+        detail::vector3(entry["cam_t_w2c"], "cam_t_w2c", context) / 1000.0;
+    camera.world_to_camera = world_to_camera;
+  }
+  return camera;
+}
+
+// GT instances of one scene_gt.json entry, validated against the dataset's models.
+std::vector<GtInstance> parse_instances(const Json& entry, const BopDataset& dataset,
+                                        const fs::path& gt_path, int scene_id, int im_id) {
+  if (!entry.is_array()) {
+    throw DatasetError(gt_path, location(scene_id, im_id) +
+                                    "entry must be a list of instances, got " + entry.type_name());
+  }
+  std::vector<GtInstance> instances;
+  instances.reserve(entry.size());
+  for (size_t k = 0; k < entry.size(); ++k) {
+    const FieldContext context{gt_path, location(scene_id, im_id, static_cast<int>(k))};
+    const Json& fields = entry[k];
+    GtInstance instance;
+    instance.obj_id =
+        detail::integer(detail::require_field(fields, "obj_id", context), "obj_id", context);
+    if (!dataset.has_model(instance.obj_id)) {
+      context.fail("obj_id " + std::to_string(instance.obj_id) + " is not in models_info.json");
+    }
+    instance.model_to_camera.linear() =
+        detail::rotation(detail::require_field(fields, "cam_R_m2c", context), "cam_R_m2c", context);
+    const Eigen::Vector3d t_mm =
+        detail::vector3(detail::require_field(fields, "cam_t_m2c", context), "cam_t_m2c", context);
+    if (t_mm.z() <= 0) {
+      context.fail("cam_t_m2c puts the object behind the camera (z = " + std::to_string(t_mm.z()) +
+                   " mm, must be > 0)");
+    }
+    instance.model_to_camera.translation() = t_mm / 1000.0;
+    instances.push_back(instance);
+  }
+  return instances;
+}
+
+// One image of a scene, converted from the scene's JSON; `error` holds the first problem
+// found in its entries, thrown when (and only when) the image is loaded.
+struct ImageRecord {
+  Camera camera;
+  std::vector<GtInstance> objects;
+  std::optional<SceneGraph> graph;
+  std::optional<DatasetError> error;
+};
+
 }  // namespace
 
 bool BopOpenOptions::IsValid(std::string* why) const {
@@ -136,15 +205,13 @@ bool BopOpenOptions::IsValid(std::string* why) const {
   return true;
 }
 
-// One scene's parsed JSON. Immutable once built, shared with the loads that use it.
+// One scene, converted from its JSON to compact records (a few kB per image, instead of the
+// JSON tree, which takes ~10x the file size). Immutable once built, shared with the loads.
 struct BopDataset::SceneFiles {
   std::string split;
   int scene_id = 0;
   fs::path dir;
-  Json camera;
-  Json gt;
-  std::optional<Json> graph;
-  std::optional<cv::Size> image_size;  // from the scene's first depth/rgb image
+  std::map<int, ImageRecord> images;  // scene_camera.json keys
 };
 
 struct BopDataset::SceneCache {
@@ -369,23 +436,61 @@ std::shared_ptr<const BopDataset::SceneFiles> BopDataset::scene(const std::strin
   const fs::path camera_path = files->dir / "scene_camera.json";
   const fs::path gt_path = files->dir / "scene_gt.json";
   const fs::path graph_path = files->dir / "scene_graph.json";
-  files->camera = detail::read_json_file(camera_path, where, "image");
-  require_object(files->camera, camera_path, where, "image id");
-  files->gt = detail::read_json_file(gt_path, where, "image");
-  require_object(files->gt, gt_path, where, "image id");
+  const Json camera_json = detail::read_json_file(camera_path, where, "image");
+  require_object(camera_json, camera_path, where, "image id");
+  const Json gt_json = detail::read_json_file(gt_path, where, "image");
+  require_object(gt_json, gt_path, where, "image id");
+  std::optional<Json> graph_json;
   if (fs::exists(graph_path, error)) {
-    files->graph = detail::read_json_file(graph_path, where, "image");
-    require_object(*files->graph, graph_path, where, "image id");
+    graph_json = detail::read_json_file(graph_path, where, "image");
+    require_object(*graph_json, graph_path, where, "image id");
   }
-  const std::vector<int> ids = sorted_ids(files->camera, camera_path, where, "image");
+
+  const std::vector<int> ids = sorted_ids(camera_json, camera_path, where, "image");
+  std::optional<cv::Size> image_size;
   if (!ids.empty()) {
     fs::path image = depth_file(files->dir, ids.front());
     if (image.empty()) image = rgb_file(files->dir, ids.front());
     if (!image.empty()) {
-      files->image_size = detail::read_image_size(image);
-      if (!files->image_size) {
+      image_size = detail::read_image_size(image);
+      if (!image_size) {
         throw DatasetError(image, location(scene_id, ids.front()) + "cannot read the image size");
       }
+    }
+  }
+  if (!image_size && root_camera_) image_size = cv::Size(root_camera_->width, root_camera_->height);
+  const double default_depth_scale =
+      root_camera_ && root_camera_->depth_scale ? *root_camera_->depth_scale : 1.0;
+
+  for (const int im_id : ids) {
+    const std::string key = std::to_string(im_id);
+    const std::string image_where = location(scene_id, im_id);
+    ImageRecord& record = files->images[im_id];
+    try {
+      record.camera = parse_camera(camera_json[key], default_depth_scale,
+                                   FieldContext{camera_path, image_where});
+      if (!image_size) {
+        throw DatasetError(files->dir, image_where +
+                                           "image size unknown: the scene has no depth/rgb image "
+                                           "and the dataset root has no camera.json");
+      }
+      record.camera.width = image_size->width;
+      record.camera.height = image_size->height;
+      const auto gt_entry = gt_json.find(key);
+      if (gt_entry == gt_json.end()) {
+        throw DatasetError(gt_path, image_where + "image has no entry in scene_gt.json");
+      }
+      record.objects = parse_instances(*gt_entry, *this, gt_path, scene_id, im_id);
+      if (graph_json) {
+        const auto graph_entry = graph_json->find(key);
+        if (graph_entry != graph_json->end()) {
+          record.graph = parse_graph(*graph_entry, static_cast<int>(record.objects.size()),
+                                     FieldContext{graph_path, image_where});
+        }
+      }
+    } catch (const DatasetError& bad_image) {
+      record = ImageRecord{};
+      record.error = bad_image;
     }
   }
 
@@ -422,99 +527,26 @@ void BopDataset::check_model_file(const ModelInfo& model, const fs::path& scene_
 
 SceneView BopDataset::load(const ImageKey& key) const {
   const std::shared_ptr<const SceneFiles> files = scene(key.split, key.scene_id);
-  const std::string image_where = location(key.scene_id, key.im_id);
-  const std::string im_key = std::to_string(key.im_id);
-  const fs::path camera_path = files->dir / "scene_camera.json";
-  const fs::path gt_path = files->dir / "scene_gt.json";
-  const fs::path graph_path = files->dir / "scene_graph.json";
+  const auto found = files->images.find(key.im_id);
+  if (found == files->images.end()) {
+    throw DatasetError(files->dir / "scene_camera.json",
+                       location(key.scene_id) + "unknown image " + std::to_string(key.im_id) +
+                           " (scene_camera.json has " + std::to_string(files->images.size()) +
+                           " images)");
+  }
+  const ImageRecord& record = found->second;
+  if (record.error) throw *record.error;
 
+  const fs::path gt_path = files->dir / "scene_gt.json";
+  for (size_t k = 0; k < record.objects.size(); ++k) {
+    check_model_file(model(record.objects[k].obj_id), gt_path,
+                     location(key.scene_id, key.im_id, static_cast<int>(k)));
+  }
   SceneView view;
   view.key = key;
-
-  const auto camera_entry = files->camera.find(im_key);
-  if (key.im_id < 0 || camera_entry == files->camera.end()) {
-    throw DatasetError(camera_path, location(key.scene_id) + "unknown image " + im_key +
-                                        " (scene_camera.json has " +
-                                        std::to_string(files->camera.size()) + " images)");
-  }
-  {
-    const FieldContext context{camera_path, image_where};
-    const Json& entry = *camera_entry;
-    Camera& camera = view.camera;
-    camera.K =
-        detail::row_major_matrix(detail::require_field(entry, "cam_K", context), "cam_K", context);
-    if (camera.fx() <= 0 || camera.fy() <= 0) context.fail("cam_K must have positive fx and fy");
-    if ((camera.K.row(2) - Eigen::RowVector3d(0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9) {
-      context.fail("cam_K's last row must be [0, 0, 1]");
-    }
-    camera.depth_scale = 1.0;
-    if (root_camera_ && root_camera_->depth_scale) camera.depth_scale = *root_camera_->depth_scale;
-    const auto scale = entry.find("depth_scale");
-    if (scale != entry.end()) {
-      camera.depth_scale = detail::finite_number(*scale, "depth_scale", context);
-      if (camera.depth_scale <= 0) context.fail("depth_scale must be positive");
-    }
-    const bool has_r = entry.contains("cam_R_w2c");
-    const bool has_t = entry.contains("cam_t_w2c");
-    if (has_r != has_t) context.fail("cam_R_w2c and cam_t_w2c must be given together");
-    if (has_r) {
-      Eigen::Isometry3d world_to_camera = Eigen::Isometry3d::Identity();
-      world_to_camera.linear() = detail::rotation(entry["cam_R_w2c"], "cam_R_w2c", context);
-      world_to_camera.translation() =
-          detail::vector3(entry["cam_t_w2c"], "cam_t_w2c", context) / 1000.0;
-      camera.world_to_camera = world_to_camera;
-    }
-    if (files->image_size) {
-      camera.width = files->image_size->width;
-      camera.height = files->image_size->height;
-    } else if (root_camera_) {
-      camera.width = root_camera_->width;
-      camera.height = root_camera_->height;
-    } else {
-      throw DatasetError(files->dir, image_where +
-                                         "image size unknown: the scene has no depth/rgb image "
-                                         "and the dataset root has no camera.json");
-    }
-  }
-
-  const auto gt_entry = files->gt.find(im_key);
-  if (gt_entry == files->gt.end()) {
-    throw DatasetError(gt_path, image_where + "image has no entry in scene_gt.json");
-  }
-  if (!gt_entry->is_array()) {
-    throw DatasetError(
-        gt_path, image_where + "entry must be a list of instances, got " + gt_entry->type_name());
-  }
-  for (size_t k = 0; k < gt_entry->size(); ++k) {
-    const FieldContext context{gt_path, location(key.scene_id, key.im_id, static_cast<int>(k))};
-    const Json& entry = (*gt_entry)[k];
-    GtInstance instance;
-    instance.obj_id =
-        detail::integer(detail::require_field(entry, "obj_id", context), "obj_id", context);
-    if (!has_model(instance.obj_id)) {
-      context.fail("obj_id " + std::to_string(instance.obj_id) + " is not in models_info.json");
-    }
-    check_model_file(model(instance.obj_id), gt_path, context.where);
-    instance.model_to_camera.linear() =
-        detail::rotation(detail::require_field(entry, "cam_R_m2c", context), "cam_R_m2c", context);
-    const Eigen::Vector3d t_mm =
-        detail::vector3(detail::require_field(entry, "cam_t_m2c", context), "cam_t_m2c", context);
-    if (t_mm.z() <= 0) {
-      context.fail("cam_t_m2c puts the object behind the camera (z = " + std::to_string(t_mm.z()) +
-                   " mm, must be > 0)");
-    }
-    instance.model_to_camera.translation() = t_mm / 1000.0;
-    view.objects.push_back(instance);
-  }
-
-  if (files->graph) {
-    const auto graph_entry = files->graph->find(im_key);
-    if (graph_entry != files->graph->end()) {
-      view.graph = parse_graph(*graph_entry, static_cast<int>(view.objects.size()),
-                               FieldContext{graph_path, image_where});
-    }
-  }
-
+  view.camera = record.camera;
+  view.objects = record.objects;
+  view.graph = record.graph;
   const auto detections = detections_.find({key.scene_id, key.im_id});
   if (detections != detections_.end()) view.detections = detections->second;
   view.depth_path = depth_file(files->dir, key.im_id);

@@ -195,6 +195,21 @@ TEST_F(BopBadInput, UnknownObjId) {
                                  "models_info.json"});
 }
 
+TEST_F(BopBadInput, ABadImageDoesNotSpoilTheOtherImagesOfItsScene) {
+  // Image 1's cube gets an unknown obj_id: image 0 still loads (--keep-going skips one image).
+  const fs::path path = scene_file("scene_gt.json");
+  std::string text = read_text(path);
+  const size_t at = text.find("\"obj_id\": 2", text.find("\"1\":"));
+  text.replace(at, 11, "\"obj_id\": 9");
+  write_text(path, text);
+  const BopDataset dataset = BopDataset::open(dir_.path());
+  EXPECT_EQ(dataset.load({"test", 1, 0}).objects.size(), 3u);
+  expect_mentions(dataset_error([&] {
+                    dataset.load({"test", 1, 1});
+                  }),
+                  {"scene_gt.json", "scene 1, image 1, gt 1: obj_id 9"});
+}
+
 TEST_F(BopBadInput, ObjIdOfTheWrongType) {
   replace_first(scene_file("scene_gt.json"), "\"obj_id\": 2", "\"obj_id\": \"2\"");
   expect_mentions(load_error(),
