@@ -160,7 +160,7 @@ TEST_P(BopCliBadInput, ExitsWithCodeThreeNamingFileAndField) {
   const fs::path root = write_tiny_bop_dataset(dir.path() / "dataset");
   bad.break_dataset(root);
   const CommandRun result =
-      run("visibility \"" + root.string() + "\" --mode bop19 --quiet --out \"" +
+      run("visibility \"" + root.string() + "\" --mode bop19 --quiet --jobs 1 --out \"" +
           (dir.path() / "out").string() + "\" " + bad.extra_arguments);
   EXPECT_FALSE(result.signalled) << "crashed:\n" << result.output;
   EXPECT_EQ(result.exit_code, 3) << result.output;
