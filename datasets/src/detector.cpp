@@ -8,7 +8,11 @@ namespace clutterscope::datasets {
 
 namespace {
 
-double round_to(double value, double step) { return std::round(value / step) * step; }
+// Rounds to a decimal step (0.01, 1e-4) so the JSON shows short numbers.
+double round_to(double value, double step) {
+  const double inverse = std::round(1.0 / step);
+  return std::round(value * inverse) / inverse;
+}
 
 // Jitters the box edges independently and clips to the image; keeps at least 1 px.
 Eigen::Vector4d jittered_box(double x0, double y0, double x1, double y1, double jitter, int width,

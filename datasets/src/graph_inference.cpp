@@ -4,6 +4,8 @@
 #include <cmath>
 #include <map>
 
+#include "bop_json.hpp"
+
 namespace clutterscope::datasets {
 
 namespace {
@@ -233,6 +235,23 @@ SceneGraph infer_scene_graph(const SceneView& view, const std::vector<ModelInfo>
     boxes.push_back(support_box(*found->second, camera_to_world * view.objects[i].model_to_camera));
   }
   return infer_scene_graph(boxes, fixed, options);
+}
+
+std::string scene_graphs_json(const std::map<int, SceneGraph>& graphs_by_image) {
+  const auto pairs = [](const std::vector<std::pair<int, int>>& list) {
+    nlohmann::json values = nlohmann::json::array();
+    for (const auto& [a, b] : list) values.push_back(nlohmann::json::array({a, b}));
+    return values;
+  };
+  std::map<int, nlohmann::json> entries;
+  for (const auto& [im_id, graph] : graphs_by_image) {
+    nlohmann::json entry;
+    entry["support"] = pairs(graph.support);
+    entry["non_contact"] = pairs(graph.non_contact);
+    entry["fixed"] = graph.fixed;
+    entries[im_id] = entry;
+  }
+  return detail::bop_dump(entries);
 }
 
 }  // namespace clutterscope::datasets

@@ -25,6 +25,9 @@ void add_commands(CLI::App& app, int* exit_code) {
   add_visibility_command(app, exit_code);
   add_merge_command(app, exit_code);
   add_bench_visibility_command(app, exit_code);
+  add_generate_command(app, exit_code);
+  add_detect_command(app, exit_code);
+  add_graph_command(app, exit_code);
 }
 
 constexpr std::size_t kHelpWidth = 100;

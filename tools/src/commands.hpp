@@ -13,5 +13,8 @@ void add_merge_command(CLI::App& app, int* exit_code);
 void add_visibility_command(CLI::App& app, int* exit_code);
 void add_bench_visibility_command(CLI::App& app, int* exit_code);
 void add_notebook_command(CLI::App& app, int* exit_code);
+void add_generate_command(CLI::App& app, int* exit_code);
+void add_detect_command(CLI::App& app, int* exit_code);
+void add_graph_command(CLI::App& app, int* exit_code);
 
 }  // namespace clutterscope::tools

@@ -14,6 +14,7 @@
 
 #include <Eigen/Geometry>
 #include <clutterscope/datasets/scene.hpp>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -72,5 +73,9 @@ SceneGraph infer_scene_graph(const SceneView& view, const std::vector<ModelInfo>
 // Support and non-contact relations from boxes already in the gravity frame.
 SceneGraph infer_scene_graph(const std::vector<SupportBox>& boxes, const std::vector<int>& fixed,
                              const GraphInferenceOptions& options = {});
+
+// The contents of a scene_graph.json for graphs by image id, in the layout BopWriter writes
+// (bop_toolkit's save_json: one image per line, keys sorted numerically).
+std::string scene_graphs_json(const std::map<int, SceneGraph>& graphs_by_image);
 
 }  // namespace clutterscope::datasets

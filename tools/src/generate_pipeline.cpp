@@ -1,0 +1,183 @@
+#include "generate_pipeline.hpp"
+
+#include <chrono>
+#include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/render/context.hpp>
+#include <clutterscope/tools/batch.hpp>
+#include <memory>
+
+#include "progress.hpp"
+
+namespace clutterscope::tools {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string six_digits(int id) {
+  char text[16];
+  std::snprintf(text, sizeof(text), "%06d", id);
+  return text;
+}
+
+}  // namespace
+
+void GenerateOptions::validate(const std::vector<datasets::CatalogueItem>& catalogue) const {
+  std::string why;
+  if (out.empty()) throw UsageError("--out: an output folder is required");
+  if (scenes < 1) throw UsageError("--scenes must be >= 1, got " + std::to_string(scenes));
+  if (width < 1 || height < 1 || width > 8192 || height > 8192) {
+    throw UsageError("--width/--height must be in [1, 8192], got " + std::to_string(width) + " x " +
+                     std::to_string(height));
+  }
+  if (tessellation < datasets::kMinTessellation || tessellation > datasets::kMaxTessellation) {
+    throw UsageError("--tessellation must be in [" + std::to_string(datasets::kMinTessellation) +
+                     ", " + std::to_string(datasets::kMaxTessellation) + "] triangles, got " +
+                     std::to_string(tessellation));
+  }
+  if (!layout.IsValid(catalogue, &why)) throw UsageError(why);
+  if (!sensor.IsValid(&why)) throw UsageError(why);
+  if (!detector.IsValid(&why)) throw UsageError(why);
+}
+
+nlohmann::json GenerateOptions::to_json() const {
+  nlohmann::json json;
+  json["preset"] = datasets::to_string(layout.preset);
+  json["scenes"] = scenes;
+  json["objects"] = {layout.min_objects, layout.max_objects};
+  json["max_stack"] = layout.max_stack;
+  json["views"] = layout.views;
+  json["seed"] = seed;
+  json["width"] = width;
+  json["height"] = height;
+  json["tessellation"] = tessellation;
+  json["rgb"] = rgb;
+  json["detector"] = {{"box_jitter", detector.box_jitter},
+                      {"min_visible_px", detector.min_visible_px},
+                      {"score_at_zero_visibility", detector.score_at_zero_visibility},
+                      {"score_noise", detector.score_noise},
+                      {"duplicate_probability", detector.duplicate_probability},
+                      {"false_positives_per_image", detector.false_positives_per_image}};
+  json["sensor"] = datasets::to_json(sensor);
+  json["clutterscope_version"] = CLUTTERSCOPE_VERSION;
+  return json;
+}
+
+render::Mesh to_render_mesh(const datasets::TriangleMesh& mesh) {
+  render::Mesh out;
+  for (const auto& p : mesh.positions) out.positions.push_back(p.cast<float>());
+  for (const auto& n : mesh.normals) out.normals.push_back(n.cast<float>());
+  out.triangles = mesh.triangles;
+  return out;
+}
+
+GenerateSummary generate_dataset(const GenerateOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<datasets::CatalogueItem> catalogue = datasets::default_catalogue();
+  options.validate(catalogue);
+
+  // Models: PLY in millimetres with normals, models_info.json, models_names.json.
+  datasets::BopWriter writer(options.out);
+  std::vector<datasets::ModelInfo> infos;
+  std::vector<render::Mesh> meshes;
+  for (const auto& item : catalogue) {
+    const datasets::TriangleMesh mesh = datasets::tessellate(item, options.tessellation);
+    const fs::path path = options.out / "models" / ("obj_" + six_digits(item.obj_id) + ".ply");
+    fs::create_directories(path.parent_path());
+    meshes.push_back(to_render_mesh(mesh));
+    render::write_ply(path, meshes.back());
+    infos.push_back(datasets::model_info(item, mesh, path));
+  }
+  writer.write_models_info(infos);
+  datasets::write_file_atomically(options.out / "sensor.json",
+                                  datasets::to_json(options.sensor).dump(2) + "\n");
+  datasets::write_file_atomically(options.out / "generator.json", options.to_json().dump(2) + "\n");
+
+  const render::EglContext context = render::EglContext::create();
+  render::Renderer renderer(context);
+  std::vector<std::unique_ptr<render::GpuMesh>> gpu_meshes;
+  for (const auto& mesh : meshes) {
+    gpu_meshes.push_back(std::make_unique<render::GpuMesh>(render::GpuMesh::upload(mesh)));
+  }
+  std::vector<int> category_ids;
+  for (const auto& item : catalogue) {
+    if (!item.fixed) category_ids.push_back(item.obj_id);
+  }
+
+  datasets::Camera camera = datasets::default_camera(options.width, options.height);
+  const render::Intrinsics intrinsics = render::Intrinsics::from_camera(camera);
+  datasets::DetectionsWriter detections(options.out / "detections_test.json");
+  Progress progress("generate", static_cast<std::size_t>(options.scenes), 0,
+                    options.quiet ? Progress::Style::kQuiet : Progress::Style::kAuto);
+  GenerateSummary summary;
+  for (int scene_id = 0; scene_id < options.scenes; ++scene_id) {
+    std::mt19937_64 layout_rng = datasets::derive_rng(options.seed, scene_id, kLayoutTask);
+    datasets::GeneratedScene scene;
+    try {
+      scene = datasets::generate_layout(catalogue, options.layout, layout_rng);
+    } catch (const datasets::GenerationError& error) {
+      throw UsageError("scene " + std::to_string(scene_id) + ": " + error.what());
+    }
+    std::vector<std::array<std::uint8_t, 3>> label_colours = {{0, 0, 0}};
+    std::vector<datasets::DetectorInstance> detector_instances;
+    for (const auto& object : scene.objects) {
+      label_colours.push_back(catalogue[object.item].colour);
+      detector_instances.push_back({object.obj_id, 0, object.fixed});
+      summary.deepest_stack = std::max(summary.deepest_stack, object.level);
+    }
+    std::vector<datasets::BopWriter::ImageData> images;
+    for (int view = 0; view < static_cast<int>(scene.world_to_camera.size()); ++view) {
+      datasets::BopWriter::ImageData image;
+      image.im_id = view;
+      image.camera = camera;
+      image.camera.world_to_camera = scene.world_to_camera[view];
+      std::vector<render::Instance> instances;
+      for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+        const auto& object = scene.objects[i];
+        const Eigen::Isometry3d model_to_camera =
+            scene.world_to_camera[view] * object.model_to_world;
+        image.objects.push_back({object.obj_id, model_to_camera});
+        instances.push_back(
+            {gpu_meshes[object.item].get(), model_to_camera, static_cast<std::uint32_t>(i + 1)});
+      }
+      image.graph = scene.graph;
+      const render::DepthLabelImage clean = renderer.render(intrinsics, instances);
+      const std::vector<render::InstanceCounts> counts =
+          renderer.count_visibility(intrinsics, instances);
+      for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+        detector_instances[i].silhouette_px = counts[i].silhouette_px;
+        if (scene.objects[i].fixed) continue;
+        ++summary.objects;
+        if (counts[i].visible_px == 0) {
+          ++summary.hidden;
+        } else if (counts[i].visible_px >= 0.95 * counts[i].silhouette_px) {
+          ++summary.fully_visible;
+        } else {
+          ++summary.partly_visible;
+        }
+      }
+      std::mt19937_64 sensor_rng = datasets::derive_rng(options.seed, scene_id, kSensorTask + view);
+      image.depth_m = datasets::apply_sensor(clean.depth, camera, options.sensor, sensor_rng);
+      if (options.rgb) {
+        image.rgb = datasets::shade_labels(clean.depth, clean.labels, camera, label_colours);
+      }
+      std::mt19937_64 detector_rng =
+          datasets::derive_rng(options.seed, scene_id, kDetectorTask + view);
+      detections.add(scene_id, view,
+                     datasets::detect(clean.labels, detector_instances, category_ids,
+                                      options.detector, detector_rng));
+      images.push_back(std::move(image));
+      ++summary.images;
+    }
+    writer.write_scene("test", scene_id, images);
+    ++summary.scenes;
+    progress.item_done();
+  }
+  detections.finish();
+  summary.detections = detections.count();
+  progress.finish(0);
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+}  // namespace clutterscope::tools
