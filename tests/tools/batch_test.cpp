@@ -384,7 +384,13 @@ TEST(Batch, ResultsAreNotHeldInMemory) {
   ASSERT_EQ(::waitpid(child, &status, 0), child);
   ASSERT_GE(growth_kib, 0) << "the 10,000-image run failed";
   std::cout << "peak RSS growth over 10,000 images: " << growth_kib << " KiB\n";
+#if defined(__SANITIZE_ADDRESS__)
+  // AddressSanitizer keeps freed memory in quarantine (256 MB by default): RSS says nothing
+  // about what the runner holds, so only the completed run is checked in such builds.
+  std::cout << "AddressSanitizer build: the RSS bound is checked in normal builds only\n";
+#else
   EXPECT_LT(growth_kib, 16 * 1024);
+#endif
 }
 
 TEST(Batch, ParseShard) {
