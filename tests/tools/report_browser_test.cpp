@@ -92,16 +92,21 @@ TEST(ReportBrowser, ChromiumLoadsReportWithoutErrorsAndEveryPlotHasASize) {
   std::filesystem::copy_file(screenshot, kept, std::filesystem::copy_options::overwrite_existing);
   std::cout << "screenshot: " << kept << "\n";
 
-  // 2. The same page with a measuring script appended (a copy beside the original): every
-  // figure's <svg> reports its rendered width and height into the DOM, which we dump.
+  // 2. The same page with a probe script in <head> (a copy beside the original): it records
+  // every element that failed to load and every resource fetched (the report must fetch
+  // none: all images are inline data), and once loaded, each figure's <svg> rendered size,
+  // into the DOM, which we dump.
   std::string html = testing::read_text(files.report_html);
   const std::string probe =
-      "<script>(function(){var out=[];document.querySelectorAll('figure.plot').forEach("
-      "function(f){var s=f.querySelector('svg');var r=s?s.getBoundingClientRect():{width:0,"
-      "height:0};out.push(f.id+' '+r.width+' '+r.height);});var pre=document.createElement("
-      "'pre');pre.id='plot-sizes';pre.textContent=out.join('\\n');document.body.appendChild("
-      "pre);})();</script>\n";
-  html.insert(html.rfind("</body>"), probe);
+      "<script>var failed=[];window.addEventListener('error',function(e){var t=e.target;"
+      "failed.push('failed '+(t&&(t.src||(t.getAttribute&&t.getAttribute('href')))||"
+      "e.message));},true);window.addEventListener('load',function(){var out=failed.slice();"
+      "document.querySelectorAll('figure.plot').forEach(function(f){var s=f.querySelector("
+      "'svg');var r=s?s.getBoundingClientRect():{width:0,height:0};out.push(f.id+' '+r.width+"
+      "' '+r.height);});performance.getEntriesByType('resource').forEach(function(e){out.push("
+      "'resource '+e.name);});var pre=document.createElement('pre');pre.id='plot-sizes';"
+      "pre.textContent=out.join('\\n');document.body.appendChild(pre);});</script>\n";
+  html.insert(html.find("</head>"), probe);
   const std::filesystem::path measured = dir / "report" / "measure.html";
   testing::write_text(measured, html);
   ASSERT_EQ(
@@ -118,9 +123,16 @@ TEST(ReportBrowser, ChromiumLoadsReportWithoutErrorsAndEveryPlotHasASize) {
   const size_t end = dom.find("</pre>", begin);
   std::istringstream sizes(dom.substr(begin + 21, end - begin - 21));
   std::map<std::string, std::pair<double, double>> measured_sizes;
-  std::string id;
-  double width = 0, height = 0;
-  while (sizes >> id >> width >> height) measured_sizes[id] = {width, height};
+  for (std::string line; std::getline(sizes, line);) {
+    std::istringstream fields(line);
+    std::string id;
+    fields >> id;
+    ASSERT_NE(id, "resource") << "the report fetched " << line;
+    ASSERT_NE(id, "failed") << "an element of the report failed to load: " << line;
+    double width = 0, height = 0;
+    fields >> width >> height;
+    measured_sizes[id] = {width, height};
+  }
   ASSERT_EQ(measured_sizes.size(), plots.size());
   for (const NamedPlot& plot : plots) {
     const auto found = measured_sizes.find("plot-" + plot.name);
