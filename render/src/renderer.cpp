@@ -105,18 +105,21 @@ void main() {
 }
 )";
 
-// Depth is the exact intersection of the pixel's ray with the triangle's plane, computed from
-// the pixel position relative to its tile: interpolated attributes depend on the absolute
-// framebuffer position (float rounding), which would make a tile differ from the same view
-// rendered alone. The plane comes from a per-triangle buffer indexed by gl_PrimitiveID, and the
-// fragment depth is written from it so the depth test sees the same value in every layout.
+// DepthMode::kExactPerTile: depth is the exact intersection of the pixel's ray with the
+// triangle's plane, computed from the pixel position relative to its tile. Interpolated
+// attributes depend on the absolute framebuffer position (llvmpipe evaluates plane equations
+// from the framebuffer origin, in float), so an interpolated tile differs in the last bits from
+// the same view rendered alone. The plane comes from a per-triangle buffer indexed by
+// gl_PrimitiveID, and the fragment depth is written from it so the depth test sees the same
+// value in every layout. It costs ~1.5-2x the interpolated shader on llvmpipe.
 constexpr const char* kSurfaceDepth = R"(
+in float camera_z;
+#ifdef EXACT_DEPTH
 uniform samplerBuffer planes;     // model-frame plane (n, d) of each triangle: n.x = d
 uniform mat4 model_view;
 uniform vec4 ray;                 // window principal point (x, y) and focal lengths (fx, fy)
 uniform vec2 tile_origin;         // window position of the target's pixel (0, 0)
 uniform vec2 depth_map;           // window depth = depth_map.x / Z + depth_map.y (reversed)
-in float camera_z;
 float surface_z() {
   vec4 plane = texelFetch(planes, gl_PrimitiveID);
   vec3 n = mat3(model_view) * plane.xyz;
@@ -129,36 +132,45 @@ float surface_z() {
   gl_FragDepth = depth_map.x / z + depth_map.y;
   return z;
 }
+#else
+float surface_z() { return camera_z; }
+#endif
 )";
 
-const std::string kDepthLabelFragmentShader = std::string(R"(#version 330 core
+std::string depth_label_fragment_shader(bool exact) {
+  return std::string("#version 330 core\n") + (exact ? "#define EXACT_DEPTH 1\n" : "") + R"(
 uniform uint label;
 layout(location = 0) out float depth_out;
 layout(location = 1) out uint label_out;
-)") + kSurfaceDepth + R"(
+)" + kSurfaceDepth +
+         R"(
 void main() {
   depth_out = surface_z();
   label_out = label;
 }
 )";
+}
 
 // No early_fragment_tests: the image store makes the shader run for hidden fragments too, so
 // the coverage image receives every instance's full silhouette while the depth test keeps the
 // front label.
-const std::string kCoverageFragmentShader = std::string(R"(#version 430 core
+std::string coverage_fragment_shader(bool exact) {
+  return std::string("#version 430 core\n") + (exact ? "#define EXACT_DEPTH 1\n" : "") + R"(
 layout(binding = 0, r32ui) uniform uimage2DArray coverage;
 uniform int coverage_layer;
 uniform uint coverage_bit;
 uniform uint label;
 layout(location = 0) out float depth_out;
 layout(location = 1) out uint label_out;
-)") + kSurfaceDepth + R"(
+)" + kSurfaceDepth +
+         R"(
 void main() {
   imageAtomicOr(coverage, ivec3(ivec2(gl_FragCoord.xy), coverage_layer), coverage_bit);
   depth_out = surface_z();
   label_out = label;
 }
 )";
+}
 
 gl::Shader compile(GLenum type, const char* source) {
   gl::Shader shader(glCreateShader(type));
@@ -302,13 +314,6 @@ GpuMesh GpuMesh::upload(const Mesh& mesh) {
       }
     }
   }
-  GLint max_texels = 0;
-  glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
-  if (mesh.triangles.size() > static_cast<std::size_t>(max_texels)) {
-    throw RenderError("mesh of " + std::to_string(mesh.triangles.size()) +
-                      " triangles exceeds GL_MAX_TEXTURE_BUFFER_SIZE " +
-                      std::to_string(max_texels) + " of this GL driver; decimate it");
-  }
   GpuMesh gpu;
   State& state = *gpu.state_;
   state.bounds = mesh.bounds();
@@ -331,6 +336,13 @@ GpuMesh GpuMesh::upload(const Mesh& mesh) {
                mesh.triangles.data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
 
+  // Triangle planes for DepthMode::kExactPerTile, where the driver's texture buffers hold them.
+  GLint max_texels = 0;
+  glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+  if (mesh.triangles.size() > static_cast<std::size_t>(max_texels)) {
+    check_gl("GpuMesh::upload");
+    return gpu;
+  }
   std::vector<Eigen::Vector4f> planes;
   planes.reserve(mesh.triangles.size());
   for (const auto& t : mesh.triangles) {
@@ -359,6 +371,7 @@ GpuMesh GpuMesh::upload(const Mesh& mesh) {
 // Renderer
 
 struct Renderer::State {
+  bool exact_depth = false;       // DepthMode::kExactPerTile
   bool zero_to_one_clip = false;  // glClipControl available: reversed Z in [0, 1]
   bool coverage_supported = false;
   GLint max_size = 0;
@@ -443,13 +456,18 @@ struct Renderer::State {
   }
 
   // Draws one instance with `program` bound; `bound_mesh` avoids rebinding the same VAO.
-  static void draw(const Program& program, const Instance& instance, std::uint32_t label,
-                   const GpuMesh::State** bound_mesh) {
+  void draw(const Program& program, const Instance& instance, std::uint32_t label,
+            const GpuMesh::State** bound_mesh) const {
     const Matrix4fColumnMajor model_view = instance.model_to_camera.matrix().cast<float>();
     glUniformMatrix4fv(program.model_view, 1, GL_FALSE, model_view.data());
     glUniform1ui(program.label, label);
     const GpuMesh::State* mesh = instance.mesh->state_.get();
     if (mesh != *bound_mesh) {
+      if (exact_depth && !mesh->planes_texture) {
+        throw RenderError("mesh of " + std::to_string(mesh->triangle_count) +
+                          " triangles exceeds this driver's GL_MAX_TEXTURE_BUFFER_SIZE, needed "
+                          "by DepthMode::kExactPerTile; decimate it or use kInterpolated");
+      }
       glBindVertexArray(mesh->vertex_array.get());
       glBindTexture(GL_TEXTURE_BUFFER, mesh->planes_texture.get());  // unit 0
       *bound_mesh = mesh;
@@ -485,7 +503,8 @@ void check_instances(const std::vector<Instance>& instances) {
 
 }  // namespace
 
-Renderer::Renderer(const EglContext& context) : state_(std::make_unique<State>()) {
+Renderer::Renderer(const EglContext& context, const RendererOptions& options)
+    : state_(std::make_unique<State>()) {
   context.make_current();
   GLint major = 0, minor = 0;
   glGetIntegerv(GL_MAJOR_VERSION, &major);
@@ -496,8 +515,11 @@ Renderer::Renderer(const EglContext& context) : state_(std::make_unique<State>()
   glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &state_->max_size);
   if (state_->zero_to_one_clip) glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  state_->depth_label = link(kVertexShader, kDepthLabelFragmentShader);
-  if (state_->coverage_supported) state_->coverage = link(kVertexShader, kCoverageFragmentShader);
+  state_->exact_depth = options.depth == DepthMode::kExactPerTile;
+  state_->depth_label = link(kVertexShader, depth_label_fragment_shader(state_->exact_depth));
+  if (state_->coverage_supported) {
+    state_->coverage = link(kVertexShader, coverage_fragment_shader(state_->exact_depth));
+  }
   check_gl("Renderer setup");
 }
 
@@ -515,7 +537,7 @@ DepthLabelImage Renderer::render(const Intrinsics& intrinsics,
   state.set_projection(state.depth_label, intrinsics, {0, 0});
   const GpuMesh::State* bound = nullptr;
   for (const auto& instance : instances) {
-    State::draw(state.depth_label, instance, instance.label, &bound);
+    state.draw(state.depth_label, instance, instance.label, &bound);
   }
   return state.read(0, 0, intrinsics.width, intrinsics.height);
 }
@@ -543,7 +565,7 @@ TileAtlas Renderer::render_tiles(const std::vector<TileRequest>& requests) {
     glViewport(rect.x, rect.y, rect.width, rect.height);
     glScissor(rect.x, rect.y, rect.width, rect.height);
     state.set_projection(program, requests[i].intrinsics, rect.tl());
-    State::draw(program, requests[i].instance, requests[i].instance.label, &bound);
+    state.draw(program, requests[i].instance, requests[i].instance.label, &bound);
   }
   result.atlas = state.read(0, 0, atlas_size.width, atlas_size.height);
   return result;
@@ -748,7 +770,7 @@ std::vector<InstanceCounts> Renderer::count_visibility(const Intrinsics& intrins
   for (std::size_t i = 0; i < instances.size(); ++i) {
     glUniform1i(program.coverage_layer, static_cast<GLint>(i / 32));
     glUniform1ui(program.coverage_bit, 1u << (i % 32));
-    State::draw(program, instances[i], static_cast<std::uint32_t>(i + 1), &bound);
+    state.draw(program, instances[i], static_cast<std::uint32_t>(i + 1), &bound);
   }
   glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
   const DepthLabelImage front = state.read(image_in_region.x, image_in_region.y,
