@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cctype>
+#include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/tools/report/plots.hpp>
 #include <clutterscope/tools/report/report.hpp>
@@ -562,17 +563,6 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
 
 namespace {
 
-// Temporary file in the same folder + rename: a killed run never leaves a half-written file.
-void write_atomically(const std::filesystem::path& path, const std::string& contents) {
-  const std::filesystem::path temporary = path.string() + ".tmp";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out << contents;
-    if (!out.flush()) throw std::runtime_error("cannot write " + temporary.string());
-  }
-  std::filesystem::rename(temporary, path);
-}
-
 bool valid_plot_name(const std::string& name) {
   return !name.empty() && std::all_of(name.begin(), name.end(), [](char ch) {
     return (ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '_' || ch == '-';
@@ -595,14 +585,15 @@ ReportFiles write_report(const std::filesystem::path& dir, const std::vector<Obj
   files.images_csv = dir / "images.csv";
   files.summary_json = dir / "summary.json";
   files.report_html = dir / "report.html";
-  write_atomically(files.objects_csv, format_objects_csv(objects));
-  write_atomically(files.images_csv, format_images_csv(analysis.images));
-  write_atomically(files.summary_json, summary_json(analysis, run).dump(2) + "\n");
+  datasets::write_file_atomically(files.objects_csv, format_objects_csv(objects));
+  datasets::write_file_atomically(files.images_csv, format_images_csv(analysis.images));
+  datasets::write_file_atomically(files.summary_json, summary_json(analysis, run).dump(2) + "\n");
   for (const NamedPlot& plot : plots) {
     files.plots.push_back(dir / "plots" / (plot.name + ".svg"));
-    write_atomically(files.plots.back(), "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n" + plot.svg);
+    datasets::write_file_atomically(files.plots.back(),
+                                    "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n" + plot.svg);
   }
-  write_atomically(files.report_html, report_html(analysis, plots, run));
+  datasets::write_file_atomically(files.report_html, report_html(analysis, plots, run));
   return files;
 }
 
