@@ -68,6 +68,16 @@ TEST_F(ReportSvg, LogAxisPlacesDecadesEvenly) {
   EXPECT_NE(svg.find("points=\"78.00,344.00 386.00,40.00\""), std::string::npos) << svg;
 }
 
+TEST_F(ReportSvg, WideLogRangesLabelEverySecondDecade) {
+  svg::Chart chart("t", {"x (1)", false, {}, {}}, {"y (1)", true, {}, {}});
+  chart.add_scatter({1, 2}, {1e-6, 1e6}, svg::category_colour(0), "pts");
+  const std::string svg = chart.render();
+  EXPECT_NE(svg.find(">1e-06<"), std::string::npos) << svg;
+  EXPECT_NE(svg.find(">0.0001<"), std::string::npos);
+  EXPECT_EQ(svg.find(">1e-05<"), std::string::npos);
+  EXPECT_NE(svg.find(">1e+06<"), std::string::npos);
+}
+
 TEST_F(ReportSvg, NonPositiveValuesOnLogAxisAreCountedNotDrawn) {
   svg::Chart chart("t", {"x (1)", false, {}, {}}, {"y (1)", true, {}, {}});
   chart.add_scatter({1, 2, 3}, {0.0, -1.0, 5.0}, svg::category_colour(0), "pts");

@@ -83,7 +83,10 @@ struct Scale {
       const int first = static_cast<int>(std::ceil(std::log10(lo) - 1e-9));
       const int last = static_cast<int>(std::floor(std::log10(hi) + 1e-9));
       const bool few_decades = last - first < 2;
+      // At most about 8 labelled decades, so labels never overlap on wide ranges.
+      const int decade_step = std::max(1, (last - first + 7) / 8);
       for (int e = first - 1; e <= last; ++e) {
+        if ((e - first) % decade_step != 0) continue;
         for (double m : few_decades ? std::vector<double>{1, 2, 5} : std::vector<double>{1}) {
           const double v = m * std::pow(10.0, e);
           if (v >= lo * (1 - 1e-9) && v <= hi * (1 + 1e-9)) values.push_back(v);
