@@ -35,6 +35,14 @@ TEST(DatasetOptions, ParseIdList) {
   }
 }
 
+TEST(DatasetOptions, FormatIdListIsCanonical) {
+  EXPECT_EQ(format_id_list({}), "");
+  EXPECT_EQ(format_id_list({4}), "4");
+  EXPECT_EQ(format_id_list({1, 3, 5, 6, 7, 9}), "1,3,5-7,9");
+  EXPECT_EQ(format_id_list({1, 2}), "1-2");
+  EXPECT_EQ(format_id_list(parse_id_list("7,5-6,0-99999,100000", "--images")), "0-100000");
+}
+
 TEST(DatasetOptions, DefaultsAndValues) {
   const fs::path dataset = testing::fresh_dir("options_dataset");
   DatasetOptions options;
@@ -64,7 +72,8 @@ TEST(DatasetOptions, DefaultsAndValues) {
 
   const nlohmann::json fingerprint = dataset_fingerprint(options);
   EXPECT_TRUE(fs::path(fingerprint["dataset"].get<std::string>()).is_absolute());
-  EXPECT_EQ(fingerprint["scenes"], nlohmann::json({2, 4, 5}));
+  EXPECT_EQ(fingerprint["scenes"], "2,4-5");
+  EXPECT_EQ(fingerprint["images"], "0-2");
   EXPECT_EQ(fingerprint["split"], "val");
 }
 

@@ -103,6 +103,19 @@ void add_dataset_options(CLI::App& command, DatasetOptions* options) {
   command.add_flag("--quiet,-q", options->quiet, "no progress output");
 }
 
+std::string format_id_list(const std::vector<int>& ids) {
+  std::string text;
+  for (std::size_t first = 0; first < ids.size();) {
+    std::size_t last = first;
+    while (last + 1 < ids.size() && ids[last + 1] == ids[last] + 1) ++last;
+    if (!text.empty()) text += ',';
+    text += std::to_string(ids[first]);
+    if (last > first) text += "-" + std::to_string(ids[last]);
+    first = last + 1;
+  }
+  return text;
+}
+
 datasets::DatasetSelection selection_of(const DatasetOptions& options) {
   datasets::DatasetSelection selection;
   selection.splits = {options.split};
@@ -128,8 +141,8 @@ nlohmann::json dataset_fingerprint(const DatasetOptions& options) {
   if (error) dataset = fs::absolute(options.dataset).lexically_normal();
   return {{"dataset", dataset.string()},
           {"split", options.split},
-          {"scenes", parse_id_list(options.scenes, "--scenes")},
-          {"images", parse_id_list(options.images, "--images")}};
+          {"scenes", format_id_list(parse_id_list(options.scenes, "--scenes"))},
+          {"images", format_id_list(parse_id_list(options.images, "--images"))}};
 }
 
 }  // namespace clutterscope::tools

@@ -31,14 +31,18 @@ void add_dataset_options(CLI::App& command, DatasetOptions* options);
 // Parses "1,2,5-7" into sorted unique ids. Throws UsageError naming `option` when malformed.
 std::vector<int> parse_id_list(const std::string& text, const std::string& option);
 
+// The canonical text of sorted unique ids: {1, 2, 5, 6, 7} -> "1,2,5-7" ("" = all).
+std::string format_id_list(const std::vector<int>& ids);
+
 // The dataset selection (one split, scene and image ids) of the options.
 datasets::DatasetSelection selection_of(const DatasetOptions& options);
 
 // Batch options (out, jobs, shard, keep-going, quiet) of the options.
 BatchOptions batch_options_of(const DatasetOptions& options, const std::string& label);
 
-// The fingerprint entries every dataset command shares: absolute dataset path, split, scenes,
-// images. Commands add their own result-changing options to it.
+// The fingerprint entries every dataset command shares: absolute dataset path, split, and the
+// canonical scene and image id lists (format_id_list). Commands add their own result-changing
+// options to it.
 nlohmann::json dataset_fingerprint(const DatasetOptions& options);
 
 }  // namespace clutterscope::tools
