@@ -129,6 +129,9 @@ bool NbpOptions::IsValid(std::string* why) const {
   if (belief_samples < 0)
     return fail("belief_samples must be >= 0, got " + std::to_string(belief_samples));
   if (!(min_bandwidth_variance > 0)) return fail("min_bandwidth_variance must be > 0");
+  if (pointwise_neighbour_samples < 1)
+    return fail("pointwise_neighbour_samples must be >= 1, got " +
+                std::to_string(pointwise_neighbour_samples));
   return true;
 }
 
@@ -210,6 +213,7 @@ NbpResult run_nbp(const PairwiseMrf& mrf, const NbpOptions& options, std::mt1993
   std::vector<BeliefSamples> next_beliefs(n);
   std::vector<uint64_t> seeds(n);
   Eigen::VectorXd unary_values, factor_values, neighbour_weights;
+  Eigen::MatrixXd subsample;
   for (int iteration = 0; iteration < options.iterations; ++iteration) {
     for (int t = 0; t < n; ++t) seeds[t] = rng();
     double iteration_min_ess = std::numeric_limits<double>::infinity();
@@ -276,8 +280,18 @@ NbpResult run_nbp(const PairwiseMrf& mrf, const NbpOptions& options, std::mt1993
         if (back >= 0 && other.factor_logs[back].size() == other_log.size())
           other_log -= other.factor_logs[back];
         normalise_log_weights(other_log, &neighbour_weights);
+        const Eigen::MatrixXd* neighbour_points = &other.points;
+        if (neighbour_weights.size() > options.pointwise_neighbour_samples) {
+          // An unbiased equal-weight subsample keeps the factor O(M) per point.
+          const std::vector<int> picked =
+              systematic_resample(neighbour_weights, options.pointwise_neighbour_samples, node_rng);
+          subsample.resize(d, static_cast<Eigen::Index>(picked.size()));
+          for (size_t j = 0; j < picked.size(); ++j) subsample.col(j) = other.points.col(picked[j]);
+          neighbour_points = &subsample;
+          neighbour_weights.setConstant(picked.size(), 1.0 / picked.size());
+        }
         mrf.edges[incs[k].edge].potential->log_factor(
-            reverse(incs[k].outgoing), batch, other.points, neighbour_weights, &factor_values);
+            reverse(incs[k].outgoing), batch, *neighbour_points, neighbour_weights, &factor_values);
         log_weights += factor_values;
         belief.factor_logs[k] = factor_values.tail(t_samples);
       }

@@ -82,13 +82,17 @@ void NonContactPotential::log_factor(EdgeDirection, const Eigen::MatrixXd& point
                                      Eigen::VectorXd* log_values) const {
   const Eigen::Array3d half_sum = 0.5 * (first_extent_ + second_extent_).array();
   log_values->resize(points.cols());
+  const Eigen::ArrayXd nx = neighbour.row(0).transpose().array();
+  const Eigen::ArrayXd ny = neighbour.row(1).transpose().array();
+  const Eigen::ArrayXd nz = neighbour.row(2).transpose().array();
+  const Eigen::ArrayXd w = weights.array();
   for (int i = 0; i < points.cols(); ++i) {
-    const Eigen::Array3d x = points.col(i).array();
-    double free_fraction = 0;
-    for (int j = 0; j < neighbour.cols(); ++j) {
-      const Eigen::Array3d delta = (neighbour.col(j).array() - x).abs();
-      if ((delta > half_sum).any()) free_fraction += weights[j];
-    }
+    // Weighted count of neighbour samples separated along some axis (vectorised over them).
+    const double free_fraction =
+        (((nx - points(0, i)).abs() > half_sum.x()) || ((ny - points(1, i)).abs() > half_sum.y()) ||
+         ((nz - points(2, i)).abs() > half_sum.z()))
+            .select(w, 0.0)
+            .sum();
     (*log_values)[i] = std::log(std::max(free_fraction, floor_));
   }
 }

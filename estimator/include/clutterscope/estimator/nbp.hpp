@@ -125,7 +125,10 @@ struct NbpOptions {
   ProductMethod product_method = ProductMethod::kAuto;
   MessageBandwidth message_bandwidth = MessageBandwidth::kPotentialKernel;
   double min_bandwidth_variance = 1e-10;  // floor of rule-of-thumb variances (units^2)
-  bool keep_history = false;              // store the beliefs of every iteration
+  // Pointwise pairwise factors (Eq. 7) use at most this many of the neighbour's samples (an
+  // equal-weight systematic resample), so their cost grows as M, not M^2.
+  int pointwise_neighbour_samples = 64;
+  bool keep_history = false;  // store the beliefs of every iteration
   bool IsValid(std::string* why) const;
 };
 
