@@ -62,7 +62,9 @@ class BopDataset {
 
   // Camera, GT instances, scene graph (if the scene has scene_graph.json with this image) and
   // detections (if a detections file was attached) of one image, validated. Also checks that
-  // every referenced model file exists and is not empty.
+  // every referenced model file exists and is not empty. A scene's JSON is parsed once into
+  // compact per-image records; a bad entry fails only its own image (a malformed file fails
+  // every image of its scene).
   SceneView load(const ImageKey& key) const;
 
   // Attach a BOP 2D detections JSON file; load() then fills SceneView::detections.
