@@ -246,28 +246,37 @@ bool has_gl_extension(const char* name) {
   return false;
 }
 
-// Shelf packing of tiles in request order into an atlas about as wide as it is high.
+// Shelf packing of tiles in request order into an atlas about as wide as it is high. Tile
+// origins sit on a 64-pixel grid: llvmpipe bins triangles into 64x64 framebuffer tiles, and a
+// tile straddling bin borders would have its triangles set up once per bin touched.
+constexpr int kTileAlignment = 64;
+
+// Triangles drawn into tiles between glFlush calls (see render_tiles).
+constexpr std::size_t kTrianglesPerFlush = 8192;
+
+int align_up(int value) { return (value + kTileAlignment - 1) / kTileAlignment * kTileAlignment; }
+
 std::vector<cv::Rect> pack_tiles(const std::vector<cv::Size>& sizes, int max_size,
                                  cv::Size* atlas) {
   double area = 0;
   int widest = 1;
   for (const auto& size : sizes) {
-    area += static_cast<double>(size.width) * size.height;
+    area += static_cast<double>(align_up(size.width)) * align_up(size.height);
     widest = std::max(widest, size.width);
   }
   const int width =
-      std::min(max_size, std::max(widest, static_cast<int>(std::ceil(std::sqrt(area) * 1.15))));
+      std::min(max_size, std::max(widest, align_up(static_cast<int>(std::ceil(std::sqrt(area))))));
   std::vector<cv::Rect> rects;
   rects.reserve(sizes.size());
   int x = 0, y = 0, shelf_height = 0;
   for (const auto& size : sizes) {
     if (x + size.width > width) {
       x = 0;
-      y += shelf_height;
+      y += align_up(shelf_height);
       shelf_height = 0;
     }
     rects.emplace_back(x, y, size.width, size.height);
-    x += size.width;
+    x += align_up(size.width);
     shelf_height = std::max(shelf_height, size.height);
   }
   *atlas = cv::Size(std::max(width, 1), std::max(y + shelf_height, 1));
@@ -475,6 +484,13 @@ struct Renderer::State {
     glDrawElements(GL_TRIANGLES, mesh->index_count, GL_UNSIGNED_INT, nullptr);
   }
 
+  cv::Mat read_labels(int x, int y, int width, int height) const {
+    cv::Mat labels(height, width, CV_32S);
+    glReadBuffer(GL_COLOR_ATTACHMENT1);
+    glReadPixels(x, y, width, height, GL_RED_INTEGER, GL_UNSIGNED_INT, labels.data);
+    return labels;
+  }
+
   DepthLabelImage read(int x, int y, int width, int height) const {
     DepthLabelImage image;
     image.depth.create(height, width, CV_32F);
@@ -560,12 +576,21 @@ TileAtlas Renderer::render_tiles(const std::vector<TileRequest>& requests) {
   const Program& program = state.depth_label;
   glUseProgram(program.program.get());
   const GpuMesh::State* bound = nullptr;
+  std::size_t triangles_since_flush = 0;
   for (std::size_t i = 0; i < requests.size(); ++i) {
     const cv::Rect& rect = result.rects[i];
     glViewport(rect.x, rect.y, rect.width, rect.height);
     glScissor(rect.x, rect.y, rect.width, rect.height);
     state.set_projection(program, requests[i].intrinsics, rect.tl());
     state.draw(program, requests[i].instance, requests[i].instance.label, &bound);
+    // llvmpipe bins a whole frame before rasterising it: past a few MB of binned triangles the
+    // bins fall out of cache and every triangle costs more. A flush hands the bins over to the
+    // rasteriser threads without waiting for them.
+    triangles_since_flush += requests[i].instance.mesh->triangle_count();
+    if (triangles_since_flush >= kTrianglesPerFlush) {
+      glFlush();
+      triangles_since_flush = 0;
+    }
   }
   result.atlas = state.read(0, 0, atlas_size.width, atlas_size.height);
   return result;
@@ -763,6 +788,7 @@ std::vector<InstanceCounts> Renderer::count_visibility(const Intrinsics& intrins
   glBindImageTexture(0, state.coverage_image.get(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_R32UI);
 
   state.begin(region.width, region.height);
+  glColorMaski(0, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);  // only labels are read back
   const Program& program = state.coverage;
   glUseProgram(program.program.get());
   state.set_projection(program, target, {0, 0});
@@ -773,14 +799,15 @@ std::vector<InstanceCounts> Renderer::count_visibility(const Intrinsics& intrins
     state.draw(program, instances[i], static_cast<std::uint32_t>(i + 1), &bound);
   }
   glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
-  const DepthLabelImage front = state.read(image_in_region.x, image_in_region.y,
-                                           image_in_region.width, image_in_region.height);
+  const cv::Mat front_labels = state.read_labels(image_in_region.x, image_in_region.y,
+                                                 image_in_region.width, image_in_region.height);
   glGetTextureSubImage(state.coverage_image.get(), 0, 0, 0, 0, region.width, region.height, layers,
                        GL_RED_INTEGER, GL_UNSIGNED_INT,
                        static_cast<GLsizei>(coverage.size() * sizeof(std::uint32_t)),
                        coverage.data());
+  glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
   check_gl("count_visibility");
-  return count_from_masks(coverage, layers, region.size(), front.labels, image_in_region,
+  return count_from_masks(coverage, layers, region.size(), front_labels, image_in_region,
                           instances.size());
 }
 
