@@ -230,11 +230,71 @@ bool ProductOptions::IsValid(std::string* why) const {
   return true;
 }
 
+namespace {
+
+// Folds every one-component input into another input exactly: a shared-bandwidth mixture
+// times a Gaussian is again a shared-bandwidth mixture (weights w_i N(a_i; mu, h + v), means
+// the per-component products, variance (1/h + 1/v)^-1). Detection priors and messages from
+// fixed nodes are single Gaussians, so scene products shrink to their hidden neighbours.
+MixtureList fold_single_components(const MixtureList& inputs, GaussianMixture* storage) {
+  MixtureList multi;
+  Eigen::VectorXd precision, weighted_mean;
+  bool any_single = false;
+  for (const GaussianMixture* m : inputs) {
+    if (m->size() > 1 || !m->shared_bandwidth()) {
+      multi.push_back(m);
+      continue;
+    }
+    const Eigen::VectorXd p = m->variances.col(0).cwiseInverse();
+    if (!any_single) {
+      precision = Eigen::VectorXd::Zero(p.size());
+      weighted_mean = Eigen::VectorXd::Zero(p.size());
+    }
+    any_single = true;
+    precision += p;
+    weighted_mean += p.cwiseProduct(m->means.col(0));
+  }
+  if (!any_single) return inputs;
+  const Eigen::VectorXd single_mean = weighted_mean.cwiseQuotient(precision);
+  const Eigen::VectorXd single_var = precision.cwiseInverse();
+  int target = -1;
+  for (int j = 0; j < static_cast<int>(multi.size()); ++j)
+    if (multi[j]->shared_bandwidth()) target = j;
+  if (target < 0) {
+    *storage = make_kernel_density(single_mean, single_var);
+    multi.push_back(storage);
+    return multi;
+  }
+  const GaussianMixture& a = *multi[target];
+  const Eigen::ArrayXd h = a.variances.col(0).array();
+  const Eigen::ArrayXd s = h + single_var.array();
+  Eigen::VectorXd log_w =
+      a.weights.array().log() -
+      0.5 * ((a.means.array().colwise() - single_mean.array()).square().colwise() / s)
+                .colwise()
+                .sum()
+                .transpose();
+  storage->variances = (h.inverse() + single_var.array().inverse()).inverse().matrix();
+  storage->means =
+      ((a.means.array().colwise() / h).colwise() + single_mean.array() / single_var.array())
+          .colwise() *
+      storage->variances.col(0).array();
+  if (!normalise_log_weights(log_w, &storage->weights))
+    throw std::invalid_argument("product of mixtures has zero mass");
+  multi[target] = storage;
+  return multi;
+}
+
+}  // namespace
+
 bool exact_label_sampling_applies(const MixtureList& inputs) {
-  if (inputs.empty() || inputs.size() > 3) return false;
-  for (const GaussianMixture* m : inputs)
+  if (inputs.empty()) return false;
+  int multi = 0;
+  for (const GaussianMixture* m : inputs) {
     if (!m->shared_bandwidth()) return false;
-  return true;
+    if (m->size() > 1) ++multi;
+  }
+  return multi <= 3;
 }
 
 Eigen::MatrixXd sample_product(const MixtureList& inputs, int count, const ProductOptions& options,
@@ -246,11 +306,15 @@ Eigen::MatrixXd sample_product(const MixtureList& inputs, int count, const Produ
   const bool exact = exact_label_sampling_applies(inputs);
   if (options.method == ProductMethod::kExactLabels && !exact)
     throw std::invalid_argument(
-        "exact label sampling needs at most 3 inputs with shared bandwidths");
+        "exact label sampling needs at most 3 multi-component inputs with shared bandwidths");
   if (inputs.size() == 1) return sample_mixture(*inputs[0], count, rng);
-  if (options.method != ProductMethod::kGibbs && exact)
-    return sample_exact_labels(inputs, count, rng);
-  return sample_gibbs(inputs, count, options.gibbs_sweeps, rng);
+  if (options.method == ProductMethod::kGibbs)
+    return sample_gibbs(inputs, count, options.gibbs_sweeps, rng);
+  GaussianMixture folded_storage;
+  const MixtureList folded = fold_single_components(inputs, &folded_storage);
+  if (folded.size() == 1) return sample_mixture(*folded[0], count, rng);
+  if (exact) return sample_exact_labels(folded, count, rng);
+  return sample_gibbs(folded, count, options.gibbs_sweeps, rng);
 }
 
 GaussianMixture exact_product(const MixtureList& inputs, long max_components) {

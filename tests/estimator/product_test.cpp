@@ -123,3 +123,31 @@ TEST(Product, RejectsBadInputWithMessage) {
 
 }  // namespace
 }  // namespace clutterscope::estimator
+
+namespace clutterscope::estimator {
+namespace {
+
+TEST(Product, SingleComponentInputsFoldExactly) {
+  // Two multi-component inputs and three single Gaussians (as detection priors and messages
+  // of fixed nodes): five inputs, still sampled exactly.
+  std::mt19937_64 rng(31);
+  const GaussianMixture a = random_mixture(3, 30, 1.0, 0.2, rng);
+  const GaussianMixture b = random_mixture(3, 20, 1.0, 0.2, rng);
+  const GaussianMixture s1 =
+      make_kernel_density(Eigen::Vector3d(0.3, 0, 0), Eigen::Vector3d(0.5, 0.5, 0.5));
+  const GaussianMixture s2 =
+      make_kernel_density(Eigen::Vector3d(0, -0.4, 0.1), Eigen::Vector3d(1, 0.3, 2));
+  const GaussianMixture s3 =
+      make_kernel_density(Eigen::Vector3d(0.1, 0.2, 0.3), Eigen::Vector3d(0.8, 0.8, 0.2));
+  const MixtureList inputs = {&s1, &a, &s2, &b, &s3};
+  EXPECT_TRUE(exact_label_sampling_applies(inputs));
+  ProductOptions options;
+  options.method = ProductMethod::kExactLabels;
+  expect_matches_exact(sample_product(inputs, 20000, options, rng), exact_product(inputs));
+  // Only single Gaussians: the product is one Gaussian.
+  const MixtureList singles = {&s1, &s2, &s3};
+  expect_matches_exact(sample_product(singles, 20000, options, rng), exact_product(singles));
+}
+
+}  // namespace
+}  // namespace clutterscope::estimator

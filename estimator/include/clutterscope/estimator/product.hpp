@@ -11,8 +11,10 @@
 // pairwise model over D discrete variables. For D <= 3 we sample it exactly: for D = 3 the
 // pair marginal Z(l_1, l_2) = sum_{l_3} ... is one M x M matrix product, O(M^3) multiply-adds
 // with a tiny constant (~0.1 ms at M = 100), then l_3 | (l_1, l_2) in O(M) per sample. This is
-// unbiased, unlike a few Gibbs sweeps. For D > 3 or per-component bandwidths we run Sudderth
-// et al.'s Gibbs sampler (kappa sweeps per sample, labels initialised sequentially).
+// unbiased, unlike a few Gibbs sweeps. One-component inputs (detection priors, messages of
+// fixed nodes) are first folded exactly into another input, so D counts only multi-component
+// inputs. For D > 3 or per-component bandwidths we run Sudderth et al.'s Gibbs sampler (kappa
+// sweeps per sample, labels initialised sequentially).
 
 #include <random>
 #include <string>
@@ -23,8 +25,9 @@
 namespace clutterscope::estimator {
 
 enum class ProductMethod {
-  kAuto,         // exact labels when possible (D <= 3, shared bandwidths), else Gibbs
-  kExactLabels,  // exact label sampling; requires D <= 3 and shared bandwidths
+  kAuto,         // exact labels when possible (<= 3 multi-component inputs, shared
+                 // bandwidths), else Gibbs; one-component inputs are folded exactly first
+  kExactLabels,  // as kAuto, but an error when exact label sampling does not apply
   kGibbs,        // Sudderth et al.'s sampler with gibbs_sweeps sweeps
 };
 
