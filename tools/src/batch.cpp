@@ -149,9 +149,11 @@ void write_run_json(const fs::path& out_dir, const std::string& command,
       {"failed", result.failed},
       {"complete", result.complete},
       {"seconds", json_rounded(result.seconds, 3)},
-      {"seconds_per_image", json_rounded(result.seconds_per_item, 6)},
-      {"images_per_second",
-       result.seconds > 0 ? json_rounded(result.computed / result.seconds, 3) : nullptr},
+      {"seconds_per_image",
+       result.computed > 0 ? json_rounded(result.seconds_per_item, 6) : nullptr},
+      {"images_per_second", result.computed > 0 && result.seconds > 0
+                                ? json_rounded(result.computed / result.seconds, 3)
+                                : nullptr},
       {"tool_version", CLUTTERSCOPE_VERSION}};
   write_json_atomically(out_dir / "run.json", run);
 }
