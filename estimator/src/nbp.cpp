@@ -1,5 +1,6 @@
 #include "clutterscope/estimator/nbp.hpp"
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <sstream>

@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <random>
 #include <string>
+#include <vector>
 
 namespace clutterscope::estimator {
 
