@@ -252,7 +252,7 @@ bool has_gl_extension(const char* name) {
 constexpr int kTileAlignment = 64;
 
 // Triangles drawn into tiles between glFlush calls (see render_tiles).
-constexpr std::size_t kTrianglesPerFlush = 8192;
+constexpr std::size_t kTrianglesPerFlush = 2048;
 
 int align_up(int value) { return (value + kTileAlignment - 1) / kTileAlignment * kTileAlignment; }
 
