@@ -28,6 +28,10 @@ void add_commands(CLI::App& app, int* exit_code) {
   add_generate_command(app, exit_code);
   add_detect_command(app, exit_code);
   add_graph_command(app, exit_code);
+  add_estimate_command(app, exit_code);
+  add_bench_estimate_command(app, exit_code);
+  add_report_command(app, exit_code);
+  add_thresholds_command(app, exit_code);
 }
 
 constexpr std::size_t kHelpWidth = 100;

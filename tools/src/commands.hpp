@@ -16,5 +16,9 @@ void add_notebook_command(CLI::App& app, int* exit_code);
 void add_generate_command(CLI::App& app, int* exit_code);
 void add_detect_command(CLI::App& app, int* exit_code);
 void add_graph_command(CLI::App& app, int* exit_code);
+void add_estimate_command(CLI::App& app, int* exit_code);
+void add_bench_estimate_command(CLI::App& app, int* exit_code);
+void add_report_command(CLI::App& app, int* exit_code);
+void add_thresholds_command(CLI::App& app, int* exit_code);
 
 }  // namespace clutterscope::tools

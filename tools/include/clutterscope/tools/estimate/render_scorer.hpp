@@ -1,0 +1,49 @@
+#pragma once
+
+// The render-backed unary of Eq. 6: an estimator::HypothesisScorer that renders an object's
+// decimated model at N hypotheses as tiles of one framebuffer (one readback per batch), each
+// tile being the detection box's scoring grid (the box crop at the scoring stride), and takes
+// estimator::pixel_cost of each tile against the observed depth.
+
+#include <Eigen/Core>
+#include <clutterscope/estimator/scorer.hpp>
+#include <clutterscope/render/model_cache.hpp>
+#include <clutterscope/render/renderer.hpp>
+#include <vector>
+
+namespace clutterscope::tools {
+
+// The target whose pixel (i, j) samples the image at (x + i * stride + 0.5, y + j * stride
+// + 0.5), i.e. the scoring grid of estimator::pixel_cost, as render intrinsics.
+render::Intrinsics scoring_grid_intrinsics(const estimator::BoxObservation& observation);
+
+class RenderHypothesisScorer : public estimator::HypothesisScorer {
+ public:
+  // `renderer` and `models` belong to the calling thread and must outlive the scorer; the
+  // models' decimated proxies are rendered (ModelCacheOptions::proxy_triangles > 0).
+  RenderHypothesisScorer(render::Renderer& renderer, render::ModelCache& models,
+                         const estimator::PixelCostOptions& options);
+  void score(int obj_id, const Eigen::Matrix3d& rotation, const Eigen::Matrix3Xd& translations,
+             const estimator::BoxObservation& observation,
+             Eigen::VectorXd* log_likelihoods) override;
+  // The same scores from one render + readback per hypothesis (the slow baseline of
+  // `clutterscope bench estimate`).
+  void score_one_by_one(int obj_id, const Eigen::Matrix3d& rotation,
+                        const Eigen::Matrix3Xd& translations,
+                        const estimator::BoxObservation& observation,
+                        Eigen::VectorXd* log_likelihoods);
+
+  long hypotheses_scored() const { return hypotheses_scored_; }
+
+ private:
+  double tile_log_likelihood(const estimator::BoxObservation& observation,
+                             const cv::Mat& tile_depth);
+  render::Renderer& renderer_;
+  render::ModelCache& models_;
+  estimator::PixelCostOptions options_;
+  std::vector<render::TileRequest> requests_;
+  std::vector<float> synthetic_;
+  long hypotheses_scored_ = 0;
+};
+
+}  // namespace clutterscope::tools

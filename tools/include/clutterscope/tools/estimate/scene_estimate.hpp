@@ -1,0 +1,114 @@
+#pragma once
+
+// Scene estimation of one image (paper §III, DESIGN §6): builds the pairwise MRF of a SceneView
+// (support frame, fixed supports at their GT pose, one hidden node per detected object, support
+// and non-contact edges from the scene graph, initial messages from detections and depth, the
+// rendered unary of Eq. 6), runs NBP and post-processes each belief by ICP and fusion.
+//
+// Orientation is taken from the GT (d = 3, the paper's setting); positions are object centres
+// (the centre of the model's bounding box). Observation: the dataset's measured depth, else a
+// synthetic one (GT depth through datasets::apply_sensor). Detections: the attached ones, else
+// the synthetic detector on the rendered GT labels. Random streams are per image
+// (tools::item_rng of seed and image), so results do not depend on threads or shards.
+//
+// A SceneEstimator owns an EGL context and renderer: one per thread, used on that thread.
+
+#include <Eigen/Geometry>
+#include <chrono>
+#include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/datasets/scene.hpp>
+#include <clutterscope/estimator/mixture.hpp>
+#include <clutterscope/estimator/nbp.hpp>
+#include <clutterscope/estimator/scorer.hpp>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "clutterscope/tools/estimate/render_scorer.hpp"
+
+namespace clutterscope::tools {
+
+struct EstimateOptions {
+  int particles = 100;   // M
+  int iterations = 15;   // NBP iterations
+  int gibbs_sweeps = 5;  // kappa
+  int icp_samples = 20;  // K belief samples refined by ICP
+  double variance_threshold_cm2 = 0.25;
+  std::uint64_t seed = 1;
+  bool keep_history = false;  // belief samples of every iteration (--save-beliefs)
+  // Unary (Eq. 6): lambda per metre of summed pixel distance, truncation, and the scoring grid
+  // size: the stride makes the longer side of the box at most grid_pixels grid pixels.
+  double unary_lambda = -2.0;
+  double unary_truncation_m = 0.02;
+  int grid_pixels = 32;
+  int proxy_triangles = 1500;  // decimated models for scoring
+  double support_z_sigma_m = 0.003;
+  double non_contact_floor = 1e-3;
+  double min_bandwidth_m = 0.001;  // floor of the rule-of-thumb kernel standard deviation
+  bool IsValid(std::string* why) const;
+};
+
+// One belief sample in the camera frame (metres).
+struct BeliefSample {
+  Eigen::Vector3d position;
+  double weight = 0;
+};
+
+struct ObjectEstimate {
+  int gt_id = 0;
+  int obj_id = 0;
+  std::string label;
+  std::string failure;                                 // empty when estimated
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // object centre, camera frame, metres
+  Eigen::Vector3d variance = Eigen::Vector3d::Zero();  // per support-frame axis, metres^2
+  bool confident = false;
+  std::optional<double> error_m, initial_error_m;  // vs the GT centre
+  double effective_sample_size = 0;                // of the final belief's weights
+  // Eq. 10 visibility of the GT instance (visible / silhouette pixels), for evaluation only.
+  std::optional<double> visibility;
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();       // model to camera (from the GT)
+  Eigen::Vector3d model_translation = Eigen::Vector3d::Zero();  // BOP t (metres)
+  std::vector<std::vector<BeliefSample>> beliefs;               // [iteration] with keep_history
+  // The unary's observation (the best-scoring detection box) and the object's GT centre in
+  // the camera frame, for benchmarks and tests.
+  std::shared_ptr<const estimator::BoxObservation> observation;
+  Eigen::Vector3d model_centre = Eigen::Vector3d::Zero();  // model frame
+};
+
+struct ViewEstimate {
+  std::vector<ObjectEstimate> objects;      // non-fixed GT instances in gt order
+  std::vector<std::string> image_failures;  // e.g. detections of objects not in the graph
+  bool graph_inferred = false;
+  std::string gravity_source;
+  std::string observation;  // "measured" or "synthetic"
+  std::string detections;   // "attached" or "synthetic"
+  estimator::NbpSummary nbp;
+  std::chrono::duration<double> time_icp{};
+  std::chrono::duration<double> time_total{};
+};
+
+class SceneEstimator {
+ public:
+  // Creates the EGL context on the calling thread. Throws std::invalid_argument for invalid
+  // options, render::RenderError without a usable EGL device.
+  SceneEstimator(const datasets::BopDataset& dataset, const EstimateOptions& options);
+  ~SceneEstimator();
+  SceneEstimator(const SceneEstimator&) = delete;
+  SceneEstimator& operator=(const SceneEstimator&) = delete;
+
+  // Estimates every non-fixed object of the view. Per-object problems (no detection, no depth
+  // in the box, support cycle) are recorded in ObjectEstimate::failure; bad dataset input
+  // (unreadable depth, models) throws datasets::DatasetError.
+  ViewEstimate estimate(const datasets::SceneView& view);
+
+  // The render-backed scorer (for the benchmark's tiled vs one-by-one comparison).
+  RenderHypothesisScorer& scorer();
+  struct State;
+
+ private:
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace clutterscope::tools

@@ -1,0 +1,208 @@
+// `clutterscope bench estimate`: times NBP scene estimation on a dataset (tray10): time per
+// scene with a breakdown, hypotheses scored per second, tiled scoring against one render +
+// readback per hypothesis in the same run, growth in M, and the product sampler alone.
+
+#include <chrono>
+#include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/estimator/bench.hpp>
+#include <clutterscope/tools/batch.hpp>
+#include <clutterscope/tools/estimate/scene_estimate.hpp>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "dataset_options.hpp"
+
+namespace clutterscope::tools {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct BenchEstimateArguments {
+  std::string dataset;
+  std::string split = "test";
+  int images = 3;
+  int particles = 100;
+  int iterations = 15;
+  std::string particle_list = "25,50,100,200";
+  std::uint64_t seed = 1;
+};
+
+struct SceneTimes {
+  double total = 0, unary = 0, products = 0, pairwise = 0, icp = 0;
+  long hypotheses = 0;
+  int objects = 0;
+};
+
+SceneTimes run_images(SceneEstimator& estimator, const std::vector<datasets::SceneView>& views) {
+  SceneTimes times;
+  const long before = estimator.scorer().hypotheses_scored();
+  for (const datasets::SceneView& view : views) {
+    const ViewEstimate result = estimator.estimate(view);
+    times.total += result.time_total.count();
+    times.unary += result.nbp.time_unary.count();
+    times.products += result.nbp.time_products.count();
+    times.pairwise += result.nbp.time_pairwise.count();
+    times.icp += result.time_icp.count();
+    times.objects += static_cast<int>(result.objects.size());
+  }
+  times.hypotheses = estimator.scorer().hypotheses_scored() - before;
+  const double n = static_cast<double>(views.size());
+  times.total /= n;
+  times.unary /= n;
+  times.products /= n;
+  times.pairwise /= n;
+  times.icp /= n;
+  return times;
+}
+
+void run_bench(const BenchEstimateArguments& arguments) {
+  const std::vector<int> particles = parse_id_list(arguments.particle_list, "--particles-list");
+  if (arguments.images < 1 || arguments.iterations < 1 || arguments.particles < 2 ||
+      particles.empty() || particles.front() < 2)
+    throw UsageError("bench estimate: --images, --iterations >= 1, particles >= 2");
+  const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
+  datasets::DatasetSelection selection;
+  selection.splits = {arguments.split};
+  std::vector<datasets::ImageKey> keys = dataset.list_images(selection);
+  if (static_cast<int>(keys.size()) > arguments.images) keys.resize(arguments.images);
+  std::vector<datasets::SceneView> views;
+  for (const auto& key : keys) views.push_back(dataset.load(key));
+
+  EstimateOptions options;
+  options.particles = arguments.particles;
+  options.iterations = arguments.iterations;
+  options.seed = arguments.seed;
+  SceneEstimator estimator(dataset, options);
+  std::printf("dataset %s: %zu images, M = %d, %d iterations\n", arguments.dataset.c_str(),
+              views.size(), arguments.particles, arguments.iterations);
+  estimator.estimate(views.front());  // warm-up: models loaded and uploaded
+  const SceneTimes main = run_images(estimator, views);
+  std::printf(
+      "time per scene: %.3f s (%.1f objects): unary rendering+scoring %.3f s, products %.3f s, "
+      "pairwise %.3f s, ICP %.3f s, other %.3f s (target <= 2 s for 10 objects)\n",
+      main.total, double(main.objects) / views.size(), main.unary, main.products, main.pairwise,
+      main.icp, main.total - main.unary - main.products - main.pairwise - main.icp);
+  std::printf("hypotheses scored per second (inside the unary): %.0f\n",
+              main.hypotheses / (main.unary * views.size()));
+
+  // Tiled against one render + readback per hypothesis, same observations and hypotheses.
+  const ViewEstimate reference = estimator.estimate(views.front());
+  std::mt19937_64 rng(arguments.seed);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  double tiled = 0, single = 0, max_difference = 0;
+  long scored = 0;
+  for (const ObjectEstimate& object : reference.objects) {
+    if (!object.observation) continue;
+    Eigen::Matrix3Xd translations(3, arguments.particles);
+    for (int h = 0; h < translations.cols(); ++h)
+      translations.col(h) =
+          object.model_translation + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    Eigen::VectorXd a, b;
+    for (int repeat = 0; repeat < 3; ++repeat) {
+      const Clock::time_point t0 = Clock::now();
+      estimator.scorer().score(object.obj_id, object.rotation, translations, *object.observation,
+                               &a);
+      const Clock::time_point t1 = Clock::now();
+      estimator.scorer().score_one_by_one(object.obj_id, object.rotation, translations,
+                                          *object.observation, &b);
+      const Clock::time_point t2 = Clock::now();
+      tiled += std::chrono::duration<double>(t1 - t0).count();
+      single += std::chrono::duration<double>(t2 - t1).count();
+      scored += translations.cols();
+    }
+    max_difference = std::max(max_difference, (a - b).cwiseAbs().maxCoeff());
+  }
+  std::printf(
+      "unary scoring of %ld hypotheses: tiled %.1f us/hypothesis, one render + readback per "
+      "hypothesis %.1f us/hypothesis, speed-up %.1fx (target >= 5x); max |log phi| difference "
+      "%.3g\n",
+      scored, 1e6 * tiled / scored, 1e6 * single / scored, single / tiled, max_difference);
+
+  // Growth in M.
+  std::printf("\n   M  s/scene  unary_s  products_s  pairwise_s  icp_s\n");
+  std::vector<double> log_m, log_t;
+  for (int m : particles) {
+    EstimateOptions grown = options;
+    grown.particles = m;
+    SceneEstimator at_m(dataset, grown);
+    at_m.estimate(views.front());
+    const SceneTimes t = run_images(at_m, views);
+    std::printf("%4d  %7.3f  %7.3f  %10.3f  %10.3f  %5.3f\n", m, t.total, t.unary, t.products,
+                t.pairwise, t.icp);
+    log_m.push_back(std::log(double(m)));
+    log_t.push_back(std::log(t.total));
+  }
+  if (log_m.size() >= 2) {
+    double mx = 0, my = 0;
+    for (std::size_t i = 0; i < log_m.size(); ++i) {
+      mx += log_m[i];
+      my += log_t[i];
+    }
+    mx /= log_m.size();
+    my /= log_m.size();
+    double sxy = 0, sxx = 0;
+    for (std::size_t i = 0; i < log_m.size(); ++i) {
+      sxy += (log_m[i] - mx) * (log_t[i] - my);
+      sxx += (log_m[i] - mx) * (log_m[i] - mx);
+    }
+    std::printf("fitted growth: time ~ M^%.2f (target <= 1.2)\n", sxy / sxx);
+  }
+
+  // The product sampler alone.
+  const estimator::ProductBenchmark product =
+      estimator::benchmark_product(100, 3, 200, {5, 100}, arguments.seed);
+  std::printf("\nproduct of 3 mixtures, M = 100, 3-D (%d products pooled for the bias):\n",
+              product.products);
+  for (const auto& method : product.methods) {
+    std::printf(
+        "  %-14s %.3f ms/product (thread CPU %.3f ms), mean bias %.2f standard errors, variance "
+        "ratio [%.3f, %.3f]\n",
+        method.method.c_str(), method.ms_per_product, method.cpu_ms_per_product,
+        method.mean_error_se, method.variance_ratio_min, method.variance_ratio_max);
+  }
+  std::printf("(times are wall clock on a machine shared with other jobs: compare ratios)\n");
+}
+
+}  // namespace
+
+void add_bench_estimate_command(CLI::App& app, int* exit_code) {
+  CLI::App* bench = nullptr;
+  for (CLI::App* command : app.get_subcommands({})) {
+    if (command->get_name() == "bench") bench = command;
+  }
+  if (bench == nullptr) {
+    bench = app.add_subcommand("bench", "Benchmarks that print timings measured in one run");
+    bench->require_subcommand(1);
+  }
+  auto arguments = std::make_shared<BenchEstimateArguments>();
+  CLI::App* command = bench->add_subcommand(
+      "estimate",
+      "Time per scene of `clutterscope estimate` with a breakdown (unary rendering and scoring, "
+      "products, pairwise, ICP), hypotheses scored per second, tiled scoring against one render "
+      "+ readback per hypothesis, a table over M with the fitted growth exponent, and the "
+      "product sampler alone (3 mixtures of M = 100 in 3-D) with its bias.");
+  command->add_option("DATASET", arguments->dataset, "BOP dataset folder (e.g. the tray10 sample)")
+      ->required();
+  command->add_option("--split", arguments->split, "split")->capture_default_str();
+  command->add_option("--images", arguments->images, "images timed (the first ones)")
+      ->capture_default_str();
+  command->add_option("--particles", arguments->particles, "M of the main measurement")
+      ->capture_default_str();
+  command->add_option("--iterations", arguments->iterations, "NBP iterations")
+      ->capture_default_str();
+  command->add_option("--particles-list", arguments->particle_list, "M values of the growth table")
+      ->capture_default_str();
+  command->add_option("--seed", arguments->seed, "seed")->capture_default_str();
+  command->callback([arguments, exit_code] {
+    run_bench(*arguments);
+    *exit_code = 0;
+  });
+}
+
+}  // namespace clutterscope::tools

@@ -1,0 +1,86 @@
+#include "clutterscope/tools/estimate/render_scorer.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace clutterscope::tools {
+
+render::Intrinsics scoring_grid_intrinsics(const estimator::BoxObservation& o) {
+  const double s = o.stride;
+  const Eigen::Matrix3d& k = o.camera_matrix;
+  render::Intrinsics grid;
+  grid.pixel_center = render::PixelCenter::kHalfPixel;
+  grid.fx = k(0, 0) / s;
+  grid.fy = k(1, 1) / s;
+  // Grid pixel i's centre i + 0.5 must map to image position x + i * s + 0.5.
+  grid.cx = (k(0, 2) - o.x - 0.5) / s + 0.5;
+  grid.cy = (k(1, 2) - o.y - 0.5) / s + 0.5;
+  grid.width = (o.width + o.stride - 1) / o.stride;
+  grid.height = (o.height + o.stride - 1) / o.stride;
+  return grid;
+}
+
+RenderHypothesisScorer::RenderHypothesisScorer(render::Renderer& renderer,
+                                               render::ModelCache& models,
+                                               const estimator::PixelCostOptions& options)
+    : renderer_(renderer), models_(models), options_(options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("pixel cost: " + why);
+}
+
+double RenderHypothesisScorer::tile_log_likelihood(const estimator::BoxObservation& observation,
+                                                   const cv::Mat& tile_depth) {
+  synthetic_.resize(static_cast<std::size_t>(tile_depth.rows) * tile_depth.cols);
+  for (int r = 0; r < tile_depth.rows; ++r) {
+    const float* row = tile_depth.ptr<float>(r);
+    std::copy(row, row + tile_depth.cols, synthetic_.begin() + std::size_t(r) * tile_depth.cols);
+  }
+  ++hypotheses_scored_;
+  return options_.lambda * estimator::pixel_cost(observation, synthetic_, options_.truncation);
+}
+
+void RenderHypothesisScorer::score(int obj_id, const Eigen::Matrix3d& rotation,
+                                   const Eigen::Matrix3Xd& translations,
+                                   const estimator::BoxObservation& observation,
+                                   Eigen::VectorXd* log_likelihoods) {
+  std::string why;
+  if (!observation.IsValid(&why)) throw std::invalid_argument("observation: " + why);
+  const render::Intrinsics grid = scoring_grid_intrinsics(observation);
+  const render::GpuMesh& mesh = models_.proxy(obj_id);
+  requests_.assign(static_cast<std::size_t>(translations.cols()), render::TileRequest{});
+  for (int h = 0; h < translations.cols(); ++h) {
+    render::TileRequest& request = requests_[static_cast<std::size_t>(h)];
+    request.intrinsics = grid;
+    request.instance.mesh = &mesh;
+    request.instance.model_to_camera.linear() = rotation;
+    request.instance.model_to_camera.translation() = translations.col(h);
+  }
+  log_likelihoods->resize(translations.cols());
+  if (translations.cols() == 0) return;
+  const render::TileAtlas atlas = renderer_.render_tiles(requests_);
+  for (int h = 0; h < translations.cols(); ++h) {
+    (*log_likelihoods)[h] =
+        tile_log_likelihood(observation, atlas.depth(static_cast<std::size_t>(h)));
+  }
+}
+
+void RenderHypothesisScorer::score_one_by_one(int obj_id, const Eigen::Matrix3d& rotation,
+                                              const Eigen::Matrix3Xd& translations,
+                                              const estimator::BoxObservation& observation,
+                                              Eigen::VectorXd* log_likelihoods) {
+  std::string why;
+  if (!observation.IsValid(&why)) throw std::invalid_argument("observation: " + why);
+  const render::Intrinsics grid = scoring_grid_intrinsics(observation);
+  const render::GpuMesh& mesh = models_.proxy(obj_id);
+  log_likelihoods->resize(translations.cols());
+  for (int h = 0; h < translations.cols(); ++h) {
+    render::Instance instance;
+    instance.mesh = &mesh;
+    instance.model_to_camera.linear() = rotation;
+    instance.model_to_camera.translation() = translations.col(h);
+    const render::DepthLabelImage image = renderer_.render(grid, {instance});
+    (*log_likelihoods)[h] = tile_log_likelihood(observation, image.depth);
+  }
+}
+
+}  // namespace clutterscope::tools

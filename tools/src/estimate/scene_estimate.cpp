@@ -1,0 +1,495 @@
+#include "clutterscope/tools/estimate/scene_estimate.hpp"
+
+#include <algorithm>
+#include <clutterscope/datasets/detector.hpp>
+#include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/graph_inference.hpp>
+#include <clutterscope/datasets/sensor.hpp>
+#include <clutterscope/estimator/icp.hpp>
+#include <clutterscope/estimator/initialisation.hpp>
+#include <clutterscope/estimator/potentials.hpp>
+#include <clutterscope/render/context.hpp>
+#include <clutterscope/render/model_cache.hpp>
+#include <clutterscope/render/renderer.hpp>
+#include <clutterscope/tools/batch.hpp>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+namespace clutterscope::tools {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Model surface points (model frame, metres), area-uniform on the triangles, for ICP.
+Eigen::Matrix3Xd surface_points(const render::Mesh& mesh, int count, std::mt19937_64& rng) {
+  std::vector<double> areas;
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3f a = mesh.positions[t[0]], b = mesh.positions[t[1]],
+                          c = mesh.positions[t[2]];
+    areas.push_back(0.5 * static_cast<double>((b - a).cross(c - a).norm()));
+  }
+  Eigen::Matrix3Xd points(3, count);
+  if (areas.empty()) return Eigen::Matrix3Xd(3, 0);
+  std::discrete_distribution<std::size_t> pick(areas.begin(), areas.end());
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int i = 0; i < count; ++i) {
+    const auto& t = mesh.triangles[pick(rng)];
+    double r1 = unit(rng), r2 = unit(rng);
+    if (r1 + r2 > 1) {
+      r1 = 1 - r1;
+      r2 = 1 - r2;
+    }
+    const Eigen::Vector3d a = mesh.positions[t[0]].cast<double>();
+    const Eigen::Vector3d b = mesh.positions[t[1]].cast<double>();
+    const Eigen::Vector3d c = mesh.positions[t[2]].cast<double>();
+    points.col(i) = a + r1 * (b - a) + r2 * (c - a);
+  }
+  return points;
+}
+
+// Height (support frame) of the upward-facing surface of a fixed support under the vertical
+// line through (x, y): the tray's floor top, the table's top. The box top when none is found.
+double support_surface_height(const render::Mesh& mesh, const Eigen::Isometry3d& model_to_support,
+                              const Eigen::Vector2d& xy, double box_top) {
+  double best = -std::numeric_limits<double>::infinity();
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d a = model_to_support * mesh.positions[t[0]].cast<double>();
+    const Eigen::Vector3d b = model_to_support * mesh.positions[t[1]].cast<double>();
+    const Eigen::Vector3d c = model_to_support * mesh.positions[t[2]].cast<double>();
+    const Eigen::Vector3d normal = (b - a).cross(c - a);
+    if (!(normal.z() > 0.9 * normal.norm())) continue;  // upward facing, near horizontal
+    // Barycentric test of (x, y) in the projected triangle.
+    const Eigen::Vector2d p0 = a.head<2>(), v0 = b.head<2>() - p0, v1 = c.head<2>() - p0,
+                          v2 = xy - p0;
+    const double det = v0.x() * v1.y() - v0.y() * v1.x();
+    if (std::abs(det) < 1e-18) continue;
+    const double s = (v2.x() * v1.y() - v2.y() * v1.x()) / det;
+    const double r = (v0.x() * v2.y() - v0.y() * v2.x()) / det;
+    if (s < 0 || r < 0 || s + r > 1) continue;
+    best = std::max(best, a.z() + s * (b.z() - a.z()) + r * (c.z() - a.z()));
+  }
+  return std::isfinite(best) ? best : box_top;
+}
+
+// The box [x, x+w) x [y, y+h) of a BOP bbox clipped to the image; empty when outside.
+cv::Rect clip_box(const Eigen::Vector4d& bbox, int width, int height) {
+  const int x0 = std::max(0, static_cast<int>(std::floor(bbox[0])));
+  const int y0 = std::max(0, static_cast<int>(std::floor(bbox[1])));
+  const int x1 = std::min(width, static_cast<int>(std::ceil(bbox[0] + bbox[2])));
+  const int y1 = std::min(height, static_cast<int>(std::ceil(bbox[1] + bbox[3])));
+  if (x1 <= x0 || y1 <= y0) return {};
+  return {x0, y0, x1 - x0, y1 - y0};
+}
+
+std::shared_ptr<estimator::BoxObservation> box_observation(const cv::Mat& depth,
+                                                           const Eigen::Matrix3d& k,
+                                                           const cv::Rect& box, int grid_pixels) {
+  auto o = std::make_shared<estimator::BoxObservation>();
+  o->camera_matrix = k;
+  o->x = box.x;
+  o->y = box.y;
+  o->width = box.width;
+  o->height = box.height;
+  o->stride = std::max(1, (std::max(box.width, box.height) + grid_pixels - 1) / grid_pixels);
+  o->depth.resize(static_cast<std::size_t>(box.width) * box.height);
+  for (int v = 0; v < box.height; ++v) {
+    const float* row = depth.ptr<float>(box.y + v) + box.x;
+    std::copy(row, row + box.width, o->depth.begin() + static_cast<std::size_t>(v) * box.width);
+  }
+  return o;
+}
+
+// Observed points (camera frame) of every pixel with depth in the box, at most `limit` (an
+// even subsample in raster order).
+Eigen::Matrix3Xd observed_points(const estimator::BoxObservation& o, int limit) {
+  std::vector<int> valid;
+  for (int i = 0; i < static_cast<int>(o.depth.size()); ++i)
+    if (o.depth[static_cast<std::size_t>(i)] > 0) valid.push_back(i);
+  const int step = std::max<int>(1, static_cast<int>((valid.size() + limit - 1) / limit));
+  const Eigen::Matrix3d k_inv = o.camera_matrix.inverse();
+  Eigen::Matrix3Xd points(3, (valid.size() + step - 1) / step);
+  int n = 0;
+  for (std::size_t j = 0; j < valid.size(); j += step) {
+    const int i = valid[j];
+    const double z = o.depth[static_cast<std::size_t>(i)];
+    points.col(n++) =
+        k_inv * Eigen::Vector3d(o.x + i % o.width + 0.5, o.y + i / o.width + 0.5, 1) * z;
+  }
+  return points.leftCols(n);
+}
+
+double box_iou(const cv::Rect& a, const cv::Rect& b) {
+  const double inter = (a & b).area();
+  const double uni = a.area() + b.area() - inter;
+  return uni > 0 ? inter / uni : 0.0;
+}
+
+// Instances on or below a cycle of support relations (Kahn's algorithm leaves them).
+std::set<int> support_cycle_members(int count, const std::vector<std::pair<int, int>>& support) {
+  std::vector<int> indegree(static_cast<std::size_t>(count), 0);
+  for (const auto& [parent, child] : support) ++indegree[static_cast<std::size_t>(child)];
+  std::vector<int> ready;
+  for (int i = 0; i < count; ++i)
+    if (indegree[static_cast<std::size_t>(i)] == 0) ready.push_back(i);
+  std::vector<bool> done(static_cast<std::size_t>(count), false);
+  while (!ready.empty()) {
+    const int node = ready.back();
+    ready.pop_back();
+    done[static_cast<std::size_t>(node)] = true;
+    for (const auto& [parent, child] : support)
+      if (parent == node && --indegree[static_cast<std::size_t>(child)] == 0)
+        ready.push_back(child);
+  }
+  std::set<int> members;
+  for (int i = 0; i < count; ++i)
+    if (!done[static_cast<std::size_t>(i)]) members.insert(i);
+  return members;
+}
+
+}  // namespace
+
+bool EstimateOptions::IsValid(std::string* why) const {
+  auto fail = [&](const std::string& message) {
+    if (why) *why = message;
+    return false;
+  };
+  if (particles < 2) return fail("--particles must be >= 2");
+  if (iterations < 1) return fail("--iterations must be >= 1");
+  if (gibbs_sweeps < 1) return fail("--gibbs-sweeps must be >= 1");
+  if (icp_samples < 1) return fail("--icp-samples must be >= 1");
+  if (!(variance_threshold_cm2 > 0) || !std::isfinite(variance_threshold_cm2))
+    return fail("--variance-threshold-cm2 must be a finite number > 0 (the paper uses 0.25)");
+  if (!(unary_lambda < 0) || !std::isfinite(unary_lambda)) return fail("unary lambda must be < 0");
+  if (!(unary_truncation_m > 0)) return fail("unary truncation must be > 0");
+  if (grid_pixels < 4) return fail("scoring grid must be >= 4 pixels");
+  if (proxy_triangles < 12) return fail("proxy triangles must be >= 12");
+  if (!(support_z_sigma_m > 0) || !(non_contact_floor > 0) || !(min_bandwidth_m > 0))
+    return fail("support sigma, non-contact floor and bandwidth floor must be > 0");
+  return true;
+}
+
+struct SceneEstimator::State {
+  State(const datasets::BopDataset& data, const EstimateOptions& opts)
+      : dataset(data),
+        options(opts),
+        context(render::EglContext::create()),
+        renderer(context),
+        models(data,
+               [&] {
+                 render::ModelCacheOptions cache;
+                 cache.proxy_triangles = static_cast<std::size_t>(opts.proxy_triangles);
+                 cache.keep_cpu_meshes = true;
+                 return cache;
+               }()),
+        scorer(std::make_shared<RenderHypothesisScorer>(
+            renderer, models,
+            estimator::PixelCostOptions{opts.unary_lambda, opts.unary_truncation_m})) {}
+
+  // Surface points of a model for ICP, fixed per obj_id (seeded by the id).
+  const Eigen::Matrix3Xd& model_points(int obj_id) {
+    auto found = points.find(obj_id);
+    if (found != points.end()) return found->second;
+    std::mt19937_64 rng(static_cast<std::uint64_t>(obj_id) * 7919u + 17u);
+    return points.emplace(obj_id, surface_points(models.cpu_mesh(obj_id), 3000, rng)).first->second;
+  }
+
+  const datasets::BopDataset& dataset;
+  EstimateOptions options;
+  render::EglContext context;
+  render::Renderer renderer;
+  render::ModelCache models;
+  std::shared_ptr<RenderHypothesisScorer> scorer;
+  std::map<int, Eigen::Matrix3Xd> points;
+};
+
+SceneEstimator::SceneEstimator(const datasets::BopDataset& dataset,
+                               const EstimateOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument(why);
+  state_ = std::make_unique<State>(dataset, options);
+}
+
+SceneEstimator::~SceneEstimator() = default;
+
+RenderHypothesisScorer& SceneEstimator::scorer() { return *state_->scorer; }
+
+ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
+  const Clock::time_point start = Clock::now();
+  State& s = *state_;
+  const EstimateOptions& options = s.options;
+  const int n = static_cast<int>(view.objects.size());
+  ViewEstimate result;
+
+  // Graph, fixed supports and the support frame.
+  datasets::SceneGraph graph;
+  if (view.graph) {
+    graph = *view.graph;
+  } else {
+    graph = datasets::infer_scene_graph(view, s.dataset.models());
+    graph.inferred = true;
+  }
+  result.graph_inferred = graph.inferred;
+  std::vector<int> fixed = graph.fixed;
+  if (!view.graph) fixed = datasets::fixed_instances(view, s.dataset.models(), {});
+  std::vector<bool> is_fixed(static_cast<std::size_t>(n), false);
+  for (int f : fixed)
+    if (f >= 0 && f < n) is_fixed[static_cast<std::size_t>(f)] = true;
+  datasets::GravitySource source;
+  const Eigen::Isometry3d support_to_camera = datasets::gravity_frame(view, fixed, &source);
+  const Eigen::Isometry3d camera_to_support = support_to_camera.inverse();
+  result.gravity_source = datasets::to_string(source);
+
+  // Per instance: model centre, support-frame position (GT) and extents.
+  std::vector<Eigen::Vector3d> centre_model(n), position(n), extent(n);
+  for (int i = 0; i < n; ++i) {
+    const datasets::ModelInfo& model = s.dataset.model(view.objects[i].obj_id);
+    centre_model[i] = model.min + 0.5 * model.size;
+    const Eigen::Isometry3d model_to_support = camera_to_support * view.objects[i].model_to_camera;
+    position[i] = model_to_support * centre_model[i];
+    extent[i] = datasets::support_box(model, model_to_support).bounds.sizes();
+  }
+
+  // Observation and labels: measured depth, else GT depth through the sensor model.
+  const render::Intrinsics image = render::Intrinsics::from_camera(view.camera);
+  cv::Mat depth;
+  cv::Mat labels;
+  const bool need_labels = view.detections.empty();
+  if (!view.depth_path.empty()) {
+    depth = datasets::load_depth(view);
+    result.observation = "measured";
+  }
+  if (depth.empty() || need_labels) {
+    const render::DepthLabelImage clean =
+        s.renderer.render(image, render::scene_instances(view, s.models));
+    labels = clean.labels;
+    if (depth.empty()) {
+      std::mt19937_64 sensor_rng = item_rng(options.seed, view.key, "sensor");
+      depth =
+          datasets::apply_sensor(clean.depth, view.camera, datasets::SensorOptions{}, sensor_rng);
+      result.observation = "synthetic";
+    }
+  }
+  std::vector<datasets::Detection> detections = view.detections;
+  result.detections = "attached";
+  if (need_labels) {
+    std::vector<datasets::DetectorInstance> instances;
+    for (int i = 0; i < n; ++i)
+      instances.push_back({view.objects[i].obj_id, 0, is_fixed[static_cast<std::size_t>(i)]});
+    std::vector<int> category_ids;
+    for (const auto& model : s.dataset.models()) category_ids.push_back(model.obj_id);
+    std::mt19937_64 detector_rng = item_rng(options.seed, view.key, "detector");
+    detections = datasets::detect(labels, instances, category_ids, datasets::DetectorOptions{},
+                                  detector_rng);
+    result.detections = "synthetic";
+  }
+
+  // Visibility of each GT instance (evaluation only; the estimator does not use it).
+  const std::vector<render::InstanceCounts> counts =
+      s.renderer.count_visibility(image, render::scene_instances(view, s.models));
+
+  // Detections to instances: by obj_id; several instances of one obj_id take the boxes that
+  // overlap their projected model bounds best.
+  std::vector<std::vector<std::pair<cv::Rect, double>>> boxes(static_cast<std::size_t>(n));
+  for (const datasets::Detection& detection : detections) {
+    const cv::Rect box = clip_box(detection.bbox, view.camera.width, view.camera.height);
+    int best = -1;
+    double best_overlap = -1;
+    for (int i = 0; i < n; ++i) {
+      if (is_fixed[static_cast<std::size_t>(i)] || view.objects[i].obj_id != detection.obj_id)
+        continue;
+      render::Instance instance;
+      instance.mesh = &s.models.proxy(view.objects[i].obj_id);
+      instance.model_to_camera = view.objects[i].model_to_camera;
+      const double overlap = box_iou(box, render::Renderer::projected_rect(image, instance));
+      if (overlap > best_overlap) {
+        best_overlap = overlap;
+        best = i;
+      }
+    }
+    if (best < 0) {
+      result.image_failures.push_back("detection of obj_id " + std::to_string(detection.obj_id) +
+                                      " matches no object of the scene graph; ignored");
+      continue;
+    }
+    if (box.area() == 0 || !(detection.score > 0)) continue;
+    boxes[static_cast<std::size_t>(best)].push_back({box, detection.score});
+  }
+
+  std::vector<std::pair<int, int>> support;
+  for (const auto& edge : graph.support)
+    if (edge.first >= 0 && edge.first < n && edge.second >= 0 && edge.second < n)
+      support.push_back(edge);
+  const std::set<int> in_cycle = support_cycle_members(n, support);
+
+  // Hidden nodes.
+  std::mt19937_64 rng = item_rng(options.seed, view.key, "nbp");
+  const double min_variance = options.min_bandwidth_m * options.min_bandwidth_m;
+  estimator::PairwiseMrf mrf;
+  mrf.dimension = 3;
+  std::vector<int> node_of(static_cast<std::size_t>(n), -1);
+  std::vector<estimator::GaussianMixture> initial(static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) {
+    if (is_fixed[static_cast<std::size_t>(i)]) continue;
+    ObjectEstimate object;
+    object.gt_id = i;
+    object.obj_id = view.objects[i].obj_id;
+    object.label = s.dataset.model(object.obj_id).label;
+    object.rotation = view.objects[i].model_to_camera.linear();
+    object.model_centre = centre_model[i];
+    if (counts[static_cast<std::size_t>(i)].silhouette_px > 0)
+      object.visibility = static_cast<double>(counts[static_cast<std::size_t>(i)].visible_px) /
+                          static_cast<double>(counts[static_cast<std::size_t>(i)].silhouette_px);
+    const auto& own = boxes[static_cast<std::size_t>(i)];
+    if (in_cycle.count(i)) {
+      object.failure = "on or above a cycle of support relations in the scene graph";
+    } else if (own.empty()) {
+      object.failure = "no detection";
+    } else {
+      std::vector<std::shared_ptr<estimator::BoxObservation>> observations;
+      std::vector<estimator::WeightedBox> weighted;
+      std::size_t best = 0;
+      for (std::size_t b = 0; b < own.size(); ++b) {
+        observations.push_back(
+            box_observation(depth, view.camera.K, own[b].first, options.grid_pixels));
+        if (own[b].second > own[best].second) best = b;
+      }
+      for (std::size_t b = 0; b < own.size(); ++b)
+        weighted.push_back({observations[b].get(), own[b].second});
+      // Half the object's depth along the view: half its camera-frame z extent.
+      const datasets::ModelInfo& model = s.dataset.model(object.obj_id);
+      double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
+      for (int corner = 0; corner < 8; ++corner) {
+        const Eigen::Vector3d offset(corner & 1 ? model.size.x() : 0,
+                                     corner & 2 ? model.size.y() : 0,
+                                     corner & 4 ? model.size.z() : 0);
+        const double z = (object.rotation * (model.min + offset)).z();
+        z_min = std::min(z_min, z);
+        z_max = std::max(z_max, z);
+      }
+      try {
+        initial[static_cast<std::size_t>(i)] = estimator::initial_mixture_from_boxes(
+            weighted, 0.5 * (z_max - z_min), camera_to_support, options.particles, min_variance,
+            rng);
+        object.observation = observations[best];
+        if (object.observation->valid_pixels() == 0)
+          throw std::invalid_argument("the detection box has no depth on its scoring grid");
+      } catch (const std::invalid_argument& error) {
+        object.failure = error.what();
+      }
+    }
+    if (object.failure.empty()) {
+      estimator::MrfNode node;
+      node.initial = initial[static_cast<std::size_t>(i)];
+      node.unary_mixture = node.initial;
+      node.unary = std::make_shared<estimator::ScorerUnary>(s.scorer, object.obj_id,
+                                                            object.rotation, centre_model[i],
+                                                            support_to_camera, object.observation);
+      node_of[static_cast<std::size_t>(i)] = static_cast<int>(mrf.nodes.size());
+      mrf.nodes.push_back(std::move(node));
+    }
+    result.objects.push_back(std::move(object));
+  }
+
+  // Fixed supports that support a hidden node: a node at the support surface, so that Eq. 8
+  // puts children on the tray's floor (not on its rim, the top of its bounding box).
+  for (const auto& [parent, child] : support) {
+    if (!is_fixed[static_cast<std::size_t>(parent)] ||
+        node_of[static_cast<std::size_t>(child)] < 0 ||
+        node_of[static_cast<std::size_t>(parent)] >= 0)
+      continue;
+    const Eigen::Isometry3d model_to_support =
+        camera_to_support * view.objects[parent].model_to_camera;
+    const double top = position[parent].z() + 0.5 * extent[parent].z();
+    const double surface =
+        support_surface_height(s.models.cpu_mesh(view.objects[parent].obj_id), model_to_support,
+                               position[parent].head<2>(), top);
+    estimator::MrfNode node;
+    node.fixed = true;
+    node.fixed_position = position[parent];
+    node.fixed_position.z() = surface - 0.5 * extent[parent].z();
+    node_of[static_cast<std::size_t>(parent)] = static_cast<int>(mrf.nodes.size());
+    mrf.nodes.push_back(std::move(node));
+  }
+  for (const auto& [parent, child] : support) {
+    const int a = node_of[static_cast<std::size_t>(parent)],
+              b = node_of[static_cast<std::size_t>(child)];
+    if (a < 0 || b < 0 || (mrf.nodes[a].fixed && mrf.nodes[b].fixed)) continue;
+    mrf.edges.push_back({a, b,
+                         std::make_shared<estimator::SupportPotential>(
+                             extent[parent], extent[child], options.support_z_sigma_m)});
+  }
+  for (const auto& [first, second] : graph.non_contact) {
+    if (first < 0 || first >= n || second < 0 || second >= n) continue;
+    const int a = node_of[static_cast<std::size_t>(first)],
+              b = node_of[static_cast<std::size_t>(second)];
+    if (a < 0 || b < 0 || (mrf.nodes[a].fixed && mrf.nodes[b].fixed)) continue;
+    mrf.edges.push_back({a, b,
+                         std::make_shared<estimator::NonContactPotential>(
+                             extent[first], extent[second], options.non_contact_floor)});
+  }
+
+  // NBP.
+  estimator::NbpResult nbp;
+  if (!mrf.nodes.empty()) {
+    estimator::NbpOptions nbp_options;
+    nbp_options.particles = options.particles;
+    nbp_options.iterations = options.iterations;
+    nbp_options.gibbs_sweeps = options.gibbs_sweeps;
+    nbp_options.min_bandwidth_variance = min_variance;
+    nbp_options.keep_history = options.keep_history;
+    nbp = estimator::run_nbp(mrf, nbp_options, rng);
+    result.nbp = nbp.summary;
+  }
+
+  // Post-processing: K belief samples refined by ICP in the camera frame, fused.
+  const Clock::time_point icp_start = Clock::now();
+  const double threshold_m2 = options.variance_threshold_cm2 * 1e-4;
+  for (ObjectEstimate& object : result.objects) {
+    const int node = node_of[static_cast<std::size_t>(object.gt_id)];
+    const Eigen::Vector3d truth = support_to_camera * position[object.gt_id];
+    if (node < 0) continue;
+    object.initial_error_m =
+        (support_to_camera * Eigen::Vector3d(estimator::mixture_mean(
+                                 initial[static_cast<std::size_t>(object.gt_id)])) -
+         truth)
+            .norm();
+    const estimator::GaussianMixture& belief = nbp.beliefs[static_cast<std::size_t>(node)];
+    object.effective_sample_size = estimator::effective_sample_size(belief.weights);
+    const estimator::TranslationIcp icp(
+        object.rotation * (s.model_points(object.obj_id).colwise() - object.model_centre),
+        estimator::IcpOptions{});
+    const Eigen::Matrix3Xd observed = observed_points(*object.observation, 4000);
+    const Eigen::MatrixXd starts = estimator::sample_mixture(belief, options.icp_samples, rng);
+    std::vector<Eigen::Vector3d> fits;
+    for (int k = 0; k < starts.cols(); ++k) {
+      const Eigen::Vector3d start_camera = support_to_camera * Eigen::Vector3d(starts.col(k));
+      // Fits in the support frame, so that variances are per support-frame axis.
+      fits.push_back(camera_to_support * icp.align(observed, start_camera).position);
+    }
+    const estimator::FusedEstimate fused = estimator::fuse_fits(fits, threshold_m2);
+    object.position = support_to_camera * fused.mean;
+    object.variance = fused.variance;
+    object.confident = fused.confident;
+    object.error_m = (object.position - truth).norm();
+    object.model_translation = object.position - object.rotation * object.model_centre;
+    if (options.keep_history) {
+      for (const auto& iteration : nbp.history) {
+        const estimator::GaussianMixture& mixture = iteration[static_cast<std::size_t>(node)];
+        std::vector<BeliefSample> samples;
+        for (int c = 0; c < mixture.size(); ++c)
+          samples.push_back(
+              {support_to_camera * Eigen::Vector3d(mixture.means.col(c)), mixture.weights[c]});
+        object.beliefs.push_back(std::move(samples));
+      }
+    }
+  }
+  result.time_icp = Clock::now() - icp_start;
+  result.time_total = Clock::now() - start;
+  return result;
+}
+
+}  // namespace clutterscope::tools
