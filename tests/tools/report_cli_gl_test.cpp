@@ -1,0 +1,282 @@
+// End to end: `clutterscope report` on a small generated dataset writes the report folder,
+// re-running it does no work and rewrites identical bytes, a folder of another job is refused
+// before any work, and `clutterscope thresholds` checks a threshold from the folder (exit 2 for
+// bad values, 3 with what to run for a folder without estimates).
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <clutterscope/render/context.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace clutterscope::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CommandRun {
+  int exit_code = -1;
+  std::string output;  // stdout
+  std::string errors;  // stderr
+};
+
+std::string read_text(const fs::path& path) {
+  std::ifstream stream(path, std::ios::binary);
+  std::ostringstream text;
+  text << stream.rdbuf();
+  return text.str();
+}
+
+nlohmann::json read_json(const fs::path& path) { return nlohmann::json::parse(read_text(path)); }
+
+CommandRun run(const std::string& arguments) {
+  const fs::path errors_file =
+      fs::temp_directory_path() / ("clutterscope_report_cli_stderr_" + std::to_string(::getpid()));
+  const std::string command = std::string("\"") + CLUTTERSCOPE_BINARY + "\" " + arguments +
+                              " 2>\"" + errors_file.string() + "\"";
+  CommandRun result;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return result;
+  char buffer[4096];
+  std::size_t read = 0;
+  while ((read = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0)
+    result.output.append(buffer, read);
+  const int status = ::pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  result.errors = read_text(errors_file);
+  fs::remove(errors_file);
+  return result;
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream stream(text);
+  for (std::string line; std::getline(stream, line);) lines.push_back(line);
+  return lines;
+}
+
+std::size_t rows_of(const fs::path& csv) { return lines_of(read_text(csv)).size() - 1; }
+
+// Every file of a report folder except run.json (this run's timing), by relative path.
+std::map<std::string, std::string> folder_bytes(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    if (!entry.is_regular_file() || entry.path().filename() == "run.json") continue;
+    files[fs::relative(entry.path(), dir).generic_string()] = read_text(entry.path());
+  }
+  return files;
+}
+
+// Small estimator settings: the test checks the plumbing, not the estimator's accuracy.
+constexpr const char* kFastEstimate =
+    " --particles 12 --iterations 2 --gibbs-sweeps 1 --icp-samples 4 --jobs 2 --quiet";
+
+class ReportCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    std::string why;
+    if (!render::egl_available(&why)) return;
+    root_ = new fs::path(fs::temp_directory_path() / "clutterscope_report_cli_test");
+    fs::remove_all(*root_);
+    generate_ = new CommandRun(run("generate --out \"" + dataset().string() +
+                                   "\" --scenes 2 --objects 4:4 --views 1 --seed 5 --width 160 "
+                                   "--height 120 --quiet"));
+    first_report_ = new CommandRun(run(report_arguments(dataset(), report_dir())));
+    first_bytes_ = new std::map<std::string, std::string>(folder_bytes(report_dir()));
+    first_run_json_ = new std::string(read_text(report_dir() / "run.json"));
+  }
+  static void TearDownTestSuite() {
+    if (root_) fs::remove_all(*root_);
+    delete root_;
+    delete generate_;
+    delete first_report_;
+    delete first_bytes_;
+    delete first_run_json_;
+    root_ = nullptr;
+  }
+  void SetUp() override {
+    std::string why;
+    if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    ASSERT_TRUE(fs::exists(CLUTTERSCOPE_BINARY)) << "build the clutterscope target first";
+    ASSERT_EQ(generate_->exit_code, 0) << generate_->errors;
+    ASSERT_EQ(first_report_->exit_code, 0) << first_report_->errors;
+  }
+  static fs::path dataset() { return *root_ / "dataset"; }
+  static fs::path report_dir() { return *root_ / "report"; }
+  static std::string report_arguments(const fs::path& data, const fs::path& out,
+                                      const std::string& extra = "") {
+    return "report \"" + data.string() + "\" --out \"" + out.string() + "\"" + kFastEstimate +
+           extra;
+  }
+
+  static fs::path* root_;
+  static CommandRun* generate_;
+  static CommandRun* first_report_;
+  static std::map<std::string, std::string>* first_bytes_;
+  static std::string* first_run_json_;
+};
+
+fs::path* ReportCli::root_ = nullptr;
+CommandRun* ReportCli::generate_ = nullptr;
+CommandRun* ReportCli::first_report_ = nullptr;
+std::map<std::string, std::string>* ReportCli::first_bytes_ = nullptr;
+std::string* ReportCli::first_run_json_ = nullptr;
+
+TEST_F(ReportCli, WritesTheReportFolderAndPrintsTheSummary) {
+  const fs::path dir = report_dir();
+  for (const char* file : {"objects.csv", "images.csv", "summary.json", "report.html",
+                           "visibility/objects.csv", "estimate/estimates.csv"}) {
+    EXPECT_TRUE(fs::is_regular_file(dir / file)) << file;
+  }
+  std::size_t plots = 0;
+  for (const auto& entry : fs::directory_iterator(dir / "plots")) {
+    plots += entry.path().extension() == ".svg" && fs::file_size(entry.path()) > 0;
+  }
+  EXPECT_GE(plots, 4u);
+
+  // stdout: the path of report.html, then the five-line summary.
+  const std::vector<std::string> lines = lines_of(first_report_->output);
+  ASSERT_EQ(lines.size(), 6u) << first_report_->output;
+  EXPECT_EQ(fs::path(lines[0]), dir / "report.html");
+
+  // Every GT instance of the dataset has one row, joined with its estimate where it has one.
+  std::size_t instances = 0;
+  for (const auto& scene : fs::directory_iterator(dataset() / "test")) {
+    const nlohmann::json scene_gt = read_json(scene.path() / "scene_gt.json");
+    for (const auto& image : scene_gt.items()) instances += image.value().size();
+  }
+  EXPECT_GE(instances, 8u);  // 2 scenes x 4 objects, plus the fixed supports
+  EXPECT_EQ(rows_of(dir / "objects.csv"), instances);
+  EXPECT_EQ(rows_of(dir / "visibility" / "objects.csv"), instances);
+  EXPECT_EQ(rows_of(dir / "images.csv"), 2u);
+  const nlohmann::json summary = read_json(dir / "summary.json");
+  const nlohmann::json& counts = summary.at("counts");
+  EXPECT_EQ(counts.at("objects").get<std::size_t>(), instances);
+  EXPECT_EQ(counts.at("images").get<int>(), 2);
+  EXPECT_GT(counts.at("estimated").get<int>(), 0);
+  EXPECT_EQ(
+      counts.at("estimated").get<std::size_t>() + counts.at("not_estimated").get<std::size_t>(),
+      instances);
+  // The options each step actually used are recorded, defaults included.
+  const nlohmann::json& run = summary.at("run");
+  EXPECT_EQ(run.at("estimate_options").at("particles").get<int>(), 12);
+  EXPECT_EQ(run.at("estimate_options").at("seed").get<int>(), 1);
+  EXPECT_EQ(run.at("visibility_options").at("mode").get<std::string>(), "rendered");
+
+  const nlohmann::json run_json = nlohmann::json::parse(*first_run_json_);
+  for (const char* step : {"visibility", "estimate"}) {
+    EXPECT_EQ(run_json.at(step).at("computed").get<int>(), 2) << step;
+    EXPECT_EQ(run_json.at(step).at("resumed").get<int>(), 0) << step;
+  }
+}
+
+TEST_F(ReportCli, RerunOnAFinishedFolderDoesNoWorkAndRewritesIdenticalBytes) {
+  const CommandRun again = run(report_arguments(dataset(), report_dir()));
+  ASSERT_EQ(again.exit_code, 0) << again.errors;
+  EXPECT_EQ(again.output, first_report_->output);
+  const nlohmann::json run_json = read_json(report_dir() / "run.json");
+  for (const char* step : {"visibility", "estimate"}) {
+    EXPECT_EQ(run_json.at(step).at("computed").get<int>(), 0) << step;
+    EXPECT_EQ(run_json.at(step).at("resumed").get<int>(), 2) << step;
+  }
+  const std::map<std::string, std::string> bytes = folder_bytes(report_dir());
+  ASSERT_EQ(bytes.size(), first_bytes_->size());
+  for (const auto& [file, content] : *first_bytes_) {
+    ASSERT_TRUE(bytes.count(file)) << file;
+    EXPECT_TRUE(bytes.at(file) == content) << file << " changed on re-run";
+  }
+}
+
+TEST_F(ReportCli, RefusesAFolderOfAnotherDatasetOrOtherOptions) {
+  const fs::path copy = *root_ / "dataset_copy";
+  fs::copy(dataset(), copy, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {report_arguments(copy, report_dir()), "/dataset/dataset"},
+      {report_arguments(dataset(), report_dir(), " --scenes 1"), "/dataset/scenes"},
+      {report_arguments(dataset(), report_dir(), " --mode bop19"), "/visibility/--mode"},
+      {"report \"" + dataset().string() + "\" --out \"" + report_dir().string() +
+           "\" --particles 13 --iterations 2 --gibbs-sweeps 1 --icp-samples 4 --quiet",
+       "/estimate/--particles"},
+      {report_arguments(dataset(), report_dir(), " --seed 2"), "/estimate/--seed"}};
+  for (const auto& [arguments, difference] : cases) {
+    const CommandRun refused = run(arguments);
+    EXPECT_EQ(refused.exit_code, 2) << arguments << "\n" << refused.errors;
+    EXPECT_NE(refused.errors.find("holds a report of a different job"), std::string::npos)
+        << refused.errors;
+    EXPECT_NE(refused.errors.find(difference), std::string::npos) << refused.errors;
+  }
+  // Nothing was mixed in: every result file is as the report left it.
+  const std::map<std::string, std::string> bytes = folder_bytes(report_dir());
+  for (const auto& [file, content] : *first_bytes_) {
+    EXPECT_TRUE(bytes.count(file) && bytes.at(file) == content) << file;
+  }
+}
+
+TEST_F(ReportCli, RefusesAFolderThatIsNotAReport) {
+  const fs::path other = *root_ / "not_a_report";
+  fs::create_directories(other);
+  std::ofstream(other / "notes.txt") << "mine\n";
+  const CommandRun refused = run(report_arguments(dataset(), other));
+  EXPECT_EQ(refused.exit_code, 2) << refused.errors;
+  EXPECT_NE(refused.errors.find("not a clutterscope report folder"), std::string::npos)
+      << refused.errors;
+  EXPECT_FALSE(fs::exists(other / "visibility"));
+}
+
+TEST_F(ReportCli, BadOptionsAreRefusedBeforeAnyWork) {
+  for (const char* extra : {" --accurate-cm -1", " --visibility-cutoff 1.5",
+                            " --variance-threshold-cm2 0", " --mode foo", " --particles 1"}) {
+    const fs::path out = *root_ / "bad_options";
+    fs::remove_all(out);
+    const CommandRun refused = run(report_arguments(dataset(), out, extra));
+    EXPECT_EQ(refused.exit_code, 2) << extra << "\n" << refused.errors;
+    EXPECT_FALSE(fs::exists(out / "visibility" / ".batch")) << extra;
+    EXPECT_FALSE(fs::exists(out / "estimate" / ".batch")) << extra;
+  }
+  // A run refused for a bad estimator option leaves a folder a corrected run can use.
+  const fs::path out = *root_ / "bad_options";
+  fs::remove_all(out);
+  ASSERT_EQ(run(report_arguments(dataset(), out, " --particles 1 --images 0")).exit_code, 2);
+  const CommandRun corrected = run(report_arguments(dataset(), out, " --scenes 1"));
+  EXPECT_EQ(corrected.exit_code, 0) << corrected.errors;
+}
+
+TEST_F(ReportCli, ThresholdsPrintsTheCheckFromAReportFolder) {
+  const CommandRun check = run("thresholds \"" + report_dir().string() +
+                               "\" --variance-cm2 0.5 --visibility-cutoff 0.2");
+  ASSERT_EQ(check.exit_code, 0) << check.errors;
+  EXPECT_FALSE(check.output.empty());
+  EXPECT_NE(check.output.find("0.5"), std::string::npos) << check.output;
+}
+
+TEST_F(ReportCli, ThresholdsRejectsBadValuesWithExitCode2) {
+  const std::string dir = "\"" + report_dir().string() + "\"";
+  for (const std::string& arguments :
+       {dir + " --variance-cm2 -1", dir + " --variance-cm2 0", dir + " --variance-cm2 nan",
+        dir + " --variance-cm2 0.25 --visibility-cutoff 1.5",
+        dir + " --variance-cm2 0.25 --accurate-cm -2", dir}) {
+    const CommandRun refused = run("thresholds " + arguments);
+    EXPECT_EQ(refused.exit_code, 2) << arguments << "\n" << refused.errors;
+    EXPECT_TRUE(refused.output.empty()) << arguments;
+  }
+}
+
+TEST_F(ReportCli, ThresholdsOnAFolderWithoutEstimatesSaysWhatToRun) {
+  // The visibility step's folder has objects.csv with visibility columns only.
+  for (const fs::path& dir : {report_dir() / "visibility", *root_ / "empty_folder"}) {
+    fs::create_directories(dir);
+    const CommandRun refused = run("thresholds \"" + dir.string() + "\" --variance-cm2 0.25");
+    EXPECT_EQ(refused.exit_code, 3) << dir << "\n" << refused.errors;
+    EXPECT_NE(refused.errors.find("clutterscope report"), std::string::npos) << refused.errors;
+  }
+}
+
+}  // namespace
+}  // namespace clutterscope::tools

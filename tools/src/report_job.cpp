@@ -1,0 +1,260 @@
+#include "report_job.hpp"
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/tools/batch.hpp>
+#include <clutterscope/tools/report/report.hpp>
+#include <clutterscope/tools/report/tables.hpp>
+#include <fstream>
+#include <functional>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <tuple>
+#include <utility>
+
+#include "commands.hpp"
+
+namespace clutterscope::tools {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using AddCommand = void (*)(CLI::App&, int*);
+
+AddCommand step_registration(const std::string& command) {
+  if (command == "visibility") return &add_visibility_command;
+  if (command == "estimate") return &add_estimate_command;
+  throw std::logic_error("report has no step '" + command + "'");
+}
+
+fs::path marker_path(const fs::path& dir) { return dir / ".report" / "job.json"; }
+
+// A step's batch runner writes .batch/job.json once its options were accepted.
+bool has_step_results(const fs::path& dir) {
+  for (const char* step : {"visibility", "estimate"}) {
+    if (fs::exists(dir / step / ".batch" / "job.json")) return true;
+  }
+  return false;
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream stream(path, std::ios::binary);
+  if (!stream) throw datasets::DatasetError(path, "cannot be read");
+  std::ostringstream text;
+  text << stream.rdbuf();
+  return text.str();
+}
+
+nlohmann::json read_json(const fs::path& path) {
+  try {
+    return nlohmann::json::parse(read_text(path));
+  } catch (const nlohmann::json::exception& error) {
+    throw datasets::DatasetError(path, std::string("is not valid JSON: ") + error.what());
+  }
+}
+
+// "15", "15.0" and "1.5e1" are one number: they select the same job.
+std::string canonical_value(const std::string& value) {
+  try {
+    std::size_t used = 0;
+    const double number = std::stod(value, &used);
+    if (used == value.size()) return report::format_number(number);
+  } catch (const std::exception&) {
+    // not a number: kept as typed
+  }
+  return value;
+}
+
+// Parses (and, unless dry_run, runs) one step's command line with the step's own command, so
+// its options are validated exactly as `clutterscope COMMAND` would. Returns its exit code.
+int parse_step(const std::vector<std::string>& command_line, bool dry_run) {
+  CLI::App app;
+  int exit_code = 0;
+  step_registration(command_line.front())(app, &exit_code);
+  if (dry_run) {
+    for (CLI::App* command : app.get_subcommands({})) command->callback(std::function<void()>());
+  }
+  std::vector<std::string> reversed(command_line.rbegin(), command_line.rend());
+  app.parse(reversed);
+  return exit_code;
+}
+
+StepRun read_step_run(const fs::path& step_dir, const std::string& command) {
+  const nlohmann::json run = read_json(step_dir / "run.json");
+  StepRun step;
+  step.command = command;
+  step.computed = run.at("computed").get<std::size_t>();
+  step.resumed = run.at("resumed").get<std::size_t>();
+  step.failed = run.at("failed").get<std::size_t>();
+  step.seconds = run.at("seconds").get<double>();
+  return step;
+}
+
+// With --keep-going an image may have failed in one step only; its rows are left out of the
+// other step's table so that the join sees only images both steps finished.
+std::vector<report::EstimateRow> estimates_of_visible_images(
+    std::vector<report::EstimateRow> estimates, const std::vector<report::ObjectRow>& objects) {
+  std::set<std::tuple<std::string, int, int>> images;
+  for (const report::ObjectRow& object : objects) {
+    images.emplace(object.split, object.scene_id, object.im_id);
+  }
+  estimates.erase(std::remove_if(estimates.begin(), estimates.end(),
+                                 [&images](const report::EstimateRow& row) {
+                                   return images.count({row.split, row.scene_id, row.im_id}) == 0;
+                                 }),
+                  estimates.end());
+  return estimates;
+}
+
+// summary.json's "run": the dataset selection, every step's options as the step recorded them
+// (its summary.json, defaults included), and the analysis options. No times: the bytes must
+// not change when a finished report is re-run.
+nlohmann::ordered_json run_record(const ReportArguments& arguments, const fs::path& dir) {
+  nlohmann::ordered_json run;
+  run["command"] = "report";
+  run["tool_version"] = CLUTTERSCOPE_VERSION;
+  run["dataset"] = dataset_fingerprint(arguments.dataset);
+  for (const char* step : {"visibility", "estimate"}) {
+    run[std::string(step) + "_options"] = read_json(dir / step / "summary.json").at("options");
+  }
+  const report::ReportOptions& analysis = arguments.analysis;
+  run["analysis"] = {{"accurate_cm", analysis.accurate_cm},
+                     {"variance_threshold_cm2", analysis.variance_threshold_cm2},
+                     {"visibility_cutoff", analysis.visibility_cutoff},
+                     {"seed", analysis.seed}};
+  return run;
+}
+
+// DIR/run.json: what this run did (times differ between runs, so they are kept here).
+void write_run_json(const fs::path& dir, const std::vector<StepRun>& steps, double seconds) {
+  nlohmann::ordered_json run;
+  run["command"] = "report";
+  for (const StepRun& step : steps) {
+    run[step.command] = {{"computed", step.computed},
+                         {"resumed", step.resumed},
+                         {"failed", step.failed},
+                         {"seconds", step.seconds}};
+  }
+  run["seconds"] = seconds;
+  run["tool_version"] = CLUTTERSCOPE_VERSION;
+  datasets::write_file_atomically(dir / "run.json", run.dump(2) + "\n");
+}
+
+}  // namespace
+
+std::vector<std::string> step_command_line(const ReportArguments& arguments,
+                                           const std::string& command) {
+  const DatasetOptions& dataset = arguments.dataset;
+  std::vector<std::string> line = {
+      command,   dataset.dataset, "--out",  (fs::path(dataset.out) / command).string(),
+      "--split", dataset.split,   "--jobs", std::to_string(dataset.jobs)};
+  if (!dataset.scenes.empty()) line.insert(line.end(), {"--scenes", dataset.scenes});
+  if (!dataset.images.empty()) line.insert(line.end(), {"--images", dataset.images});
+  if (dataset.keep_going) line.push_back("--keep-going");
+  if (dataset.quiet) line.push_back("--quiet");
+  const bool estimate = command == "estimate";
+  for (const auto& [name, value] : estimate ? arguments.estimate : arguments.visibility) {
+    line.push_back(name);
+    if (!value.empty()) line.push_back(value);
+  }
+  if (estimate) {
+    // The report's threshold and seed are the estimator's too, so that "confident" and the
+    // random streams mean the same in DIR/estimate and in the report.
+    line.insert(line.end(), {"--variance-threshold-cm2",
+                             report::format_number(arguments.analysis.variance_threshold_cm2),
+                             "--seed", std::to_string(arguments.analysis.seed)});
+  }
+  return line;
+}
+
+nlohmann::json report_fingerprint(const ReportArguments& arguments) {
+  nlohmann::json fingerprint;
+  fingerprint["command"] = "report";
+  fingerprint["dataset"] = dataset_fingerprint(arguments.dataset);
+  const auto options_of = [](const ForwardedOptions& options) {
+    nlohmann::json json = nlohmann::json::object();
+    for (const auto& [name, value] : options) json[name] = canonical_value(value);
+    return json;
+  };
+  fingerprint["visibility"] = options_of(arguments.visibility);
+  nlohmann::json estimate = options_of(arguments.estimate);
+  estimate["--variance-threshold-cm2"] =
+      report::format_number(arguments.analysis.variance_threshold_cm2);
+  estimate["--seed"] = std::to_string(arguments.analysis.seed);
+  fingerprint["estimate"] = estimate;
+  return fingerprint;
+}
+
+void prepare_report_folder(const fs::path& dir, const nlohmann::json& fingerprint) {
+  const fs::path marker = marker_path(dir);
+  if (fs::exists(marker)) {
+    const nlohmann::json stored = read_json(marker);
+    const nlohmann::json patch = nlohmann::json::diff(stored, fingerprint);
+    if (patch.empty()) return;
+    if (!has_step_results(dir)) {
+      // An earlier run was refused before any step started: nothing to mix, take it over.
+      datasets::write_file_atomically(marker, fingerprint.dump(2) + "\n");
+      return;
+    }
+    const nlohmann::json::json_pointer pointer(patch.front().at("path").get<std::string>());
+    const auto value_at = [&pointer](const nlohmann::json& document) {
+      return document.contains(pointer) ? document.at(pointer).dump() : std::string("(not given)");
+    };
+    throw UsageError(dir.string() + " holds a report of a different job (" + pointer.to_string() +
+                     " is " + value_at(stored) + " there, " + value_at(fingerprint) +
+                     " now); its results are not mixed with this run's: choose another --out or "
+                     "delete that folder");
+  }
+  if (fs::exists(dir) && !(fs::is_directory(dir) && fs::is_empty(dir))) {
+    throw UsageError(dir.string() +
+                     " exists and is not a clutterscope report folder (no .report/job.json); "
+                     "choose a new or empty --out folder");
+  }
+  fs::create_directories(marker.parent_path());
+  datasets::write_file_atomically(marker, fingerprint.dump(2) + "\n");
+}
+
+ReportRun run_report(const ReportArguments& arguments) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string why;
+  if (!arguments.analysis.IsValid(&why)) throw UsageError(why);
+  if (!arguments.dataset.shard.empty()) {
+    throw UsageError(
+        "report does not take --shard: run `clutterscope visibility` and `clutterscope "
+        "estimate` shards, `clutterscope merge` them into DIR/visibility and DIR/estimate, "
+        "then run report on DIR");
+  }
+  const fs::path dir = arguments.dataset.out;
+  // Every option of both steps is checked before either step starts work.
+  const std::vector<std::string> steps = {"estimate", "visibility"};
+  for (const std::string& step : steps) parse_step(step_command_line(arguments, step), true);
+  prepare_report_folder(dir, report_fingerprint(arguments));
+
+  ReportRun run;
+  for (const std::string& step : steps) {
+    run.exit_code = std::max(run.exit_code, parse_step(step_command_line(arguments, step), false));
+    run.steps.push_back(read_step_run(dir / step, step));
+  }
+
+  const fs::path visibility_dir = dir / "visibility";
+  const fs::path estimates_csv = dir / "estimate" / "estimates.csv";
+  std::vector<report::ObjectRow> objects = report::read_objects_csv(visibility_dir / "objects.csv");
+  report::join_estimates(
+      objects, estimates_of_visible_images(report::read_estimates_csv(estimates_csv), objects),
+      estimates_csv);
+  const report::ReportAnalysis analysis = report::analyse_report(
+      objects, report::read_images_csv(visibility_dir / "images.csv"), arguments.analysis);
+  const std::vector<report::NamedPlot> plots = report::standard_plots(objects, analysis);
+  run.files = report::write_report(dir, objects, analysis, plots, run_record(arguments, dir));
+  run.console_summary = report::format_console_summary(analysis);
+  write_run_json(dir, run.steps,
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  return run;
+}
+
+}  // namespace clutterscope::tools
