@@ -31,6 +31,8 @@ struct BenchEstimateArguments {
   int iterations = 15;
   std::string particle_list = "25,50,100,200";
   std::uint64_t seed = 1;
+  int proxy_triangles = EstimateOptions{}.proxy_triangles;
+  int grid_pixels = EstimateOptions{}.grid_pixels;
 };
 
 struct SceneTimes {
@@ -78,6 +80,8 @@ void run_bench(const BenchEstimateArguments& arguments) {
   options.particles = arguments.particles;
   options.iterations = arguments.iterations;
   options.seed = arguments.seed;
+  options.proxy_triangles = arguments.proxy_triangles;
+  options.grid_pixels = arguments.grid_pixels;
   SceneEstimator estimator(dataset, options);
   std::printf("dataset %s: %zu images, M = %d, %d iterations\n", arguments.dataset.c_str(),
               views.size(), arguments.particles, arguments.iterations);
@@ -199,6 +203,10 @@ void add_bench_estimate_command(CLI::App& app, int* exit_code) {
   command->add_option("--particles-list", arguments->particle_list, "M values of the growth table")
       ->capture_default_str();
   command->add_option("--seed", arguments->seed, "seed")->capture_default_str();
+  command->add_option("--proxy-triangles", arguments->proxy_triangles, "decimated model size")
+      ->capture_default_str();
+  command->add_option("--grid-pixels", arguments->grid_pixels, "scoring grid size")
+      ->capture_default_str();
   command->callback([arguments, exit_code] {
     run_bench(*arguments);
     *exit_code = 0;

@@ -300,6 +300,7 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
   job.fingerprint["unary_lambda"] = e.unary_lambda;
   job.fingerprint["unary_truncation_mm"] = 1e3 * e.unary_truncation_m;
   job.fingerprint["grid_pixels"] = e.grid_pixels;
+  job.fingerprint["proxy_triangles"] = e.proxy_triangles;
   job.make_worker = [&dataset, &arguments]() -> ItemFunction {
     auto worker = std::make_shared<EstimateWorker>(dataset, arguments);
     return [worker](const datasets::ImageKey& key) { return worker->run(key); };
@@ -344,6 +345,9 @@ void add_estimate_command(CLI::App& app, int* exit_code) {
   command
       ->add_option("--grid-pixels", e.grid_pixels,
                    "scoring grid: the longer side of a detection box in grid pixels")
+      ->capture_default_str();
+  command->add_option("--proxy-triangles", e.proxy_triangles,
+                      "triangles of the decimated models rendered for the unary")
       ->capture_default_str();
   command->add_flag("--save-beliefs", arguments->save_beliefs,
                     "also write the belief samples of every iteration (camera frame, mm)");

@@ -24,6 +24,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// Observed points per ICP fit (an even subsample of the box): enough for a translation.
+constexpr int kIcpObservedPoints = 600;
+
 // Model surface points (model frame, metres), area-uniform on the triangles, for ICP.
 Eigen::Matrix3Xd surface_points(const render::Mesh& mesh, int count, std::mt19937_64& rng) {
   std::vector<double> areas;
@@ -462,7 +465,7 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
     const estimator::TranslationIcp icp(
         object.rotation * (s.model_points(object.obj_id).colwise() - object.model_centre),
         estimator::IcpOptions{});
-    const Eigen::Matrix3Xd observed = observed_points(*object.observation, 4000);
+    const Eigen::Matrix3Xd observed = observed_points(*object.observation, kIcpObservedPoints);
     const Eigen::MatrixXd starts = estimator::sample_mixture(belief, options.icp_samples, rng);
     std::vector<Eigen::Vector3d> fits;
     for (int k = 0; k < starts.cols(); ++k) {
