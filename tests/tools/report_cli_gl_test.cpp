@@ -194,6 +194,27 @@ TEST_F(ReportCli, RerunOnAFinishedFolderDoesNoWorkAndRewritesIdenticalBytes) {
   }
 }
 
+TEST_F(ReportCli, AnInterruptedReportResumesWhereItStopped) {
+  // A report stopped after estimating one of the two images: the other image's result and the
+  // final files are missing.
+  const fs::path dir = *root_ / "interrupted";
+  fs::copy(report_dir(), dir, fs::copy_options::recursive);
+  fs::remove(dir / "estimate" / ".batch" / "parts" / "test" / "000001" / "000000.json");
+  for (const char* file : {"estimate/estimates.csv", "estimate/summary.json", "objects.csv",
+                           "summary.json", "report.html"}) {
+    fs::remove(dir / file);
+  }
+  const CommandRun resumed = run(report_arguments(dataset(), dir));
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.errors;
+  const nlohmann::json run_json = read_json(dir / "run.json");
+  EXPECT_EQ(run_json.at("estimate").at("computed").get<int>(), 1);
+  EXPECT_EQ(run_json.at("estimate").at("resumed").get<int>(), 1);
+  EXPECT_EQ(run_json.at("visibility").at("computed").get<int>(), 0);
+  // Per-image random streams: the recomputed image gives the same report.
+  EXPECT_TRUE(read_text(dir / "summary.json") == first_bytes_->at("summary.json"));
+  EXPECT_TRUE(read_text(dir / "report.html") == first_bytes_->at("report.html"));
+}
+
 TEST_F(ReportCli, RefusesAFolderOfAnotherDatasetOrOtherOptions) {
   const fs::path copy = *root_ / "dataset_copy";
   fs::copy(dataset(), copy, fs::copy_options::recursive | fs::copy_options::overwrite_existing);
@@ -246,6 +267,7 @@ TEST_F(ReportCli, BadOptionsAreRefusedBeforeAnyWork) {
   ASSERT_EQ(run(report_arguments(dataset(), out, " --particles 1 --images 0")).exit_code, 2);
   const CommandRun corrected = run(report_arguments(dataset(), out, " --scenes 1"));
   EXPECT_EQ(corrected.exit_code, 0) << corrected.errors;
+  EXPECT_TRUE(fs::exists(out / "report.html"));
 }
 
 TEST_F(ReportCli, ThresholdsPrintsTheCheckFromAReportFolder) {

@@ -16,7 +16,7 @@ namespace clutterscope::tools {
 namespace {
 
 // An option of a step that report forwards when given. Its default and validation are the
-// step's own (`clutterscope STEP --help`).
+// step's own (`clutterscope STEP --help`), checked before either step starts.
 struct StepOption {
   const char* step;  // "visibility" or "estimate"
   const char* name;
@@ -39,7 +39,10 @@ const std::vector<StepOption>& step_options() {
       {"estimate", "--icp-samples", false, "estimate: K belief samples refined by ICP"},
       {"estimate", "--detections", false, "estimate: BOP 2D detections JSON"},
       {"estimate", "--unary-lambda", false, "estimate: lambda_r of Eq. 6"},
+      {"estimate", "--unary-truncation-mm", false, "estimate: truncation of the Eq. 6 unary"},
       {"estimate", "--grid-pixels", false, "estimate: scoring grid size"},
+      {"estimate", "--proxy-triangles", false, "estimate: triangles of the scoring models"},
+      {"estimate", "--bandwidth-floor-mm", false, "estimate: floor of the kernel bandwidth"},
       {"estimate", "--save-beliefs", true,
        "estimate: also write the belief samples of every iteration"},
       {"estimate", "--no-time", true,
@@ -77,8 +80,8 @@ void add_report_command(CLI::App& app, int* exit_code) {
       "report",
       "The clutter report of a dataset: runs visibility and estimation into DIR/visibility and "
       "DIR/estimate (finished images are reused, so an interrupted report resumes), then writes "
-      "objects.csv, images.csv, summary.json, report.html and plots/ into DIR "
-      "and prints the path of report.html and a five-line summary. A folder holding a "
+      "objects.csv, images.csv, summary.json, report.html and plots/ "
+      "into DIR and prints the path of report.html and a five-line summary. A folder holding a "
       "report of another dataset or other options is refused.");
   add_dataset_options(*command, &arguments.dataset);
   report::ReportOptions& analysis = arguments.analysis;
@@ -102,7 +105,7 @@ void add_report_command(CLI::App& app, int* exit_code) {
     if (option.flag) {
       command->add_flag(option.name, state->flags[option.name], option.help);
     } else {
-      command->add_option(option.name, state->values[option.name], option.help);
+      command->add_option(option.name, state->values[option.name], option.help)->type_name("VALUE");
     }
   }
   command->callback(
