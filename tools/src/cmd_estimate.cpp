@@ -301,6 +301,7 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
   job.fingerprint["unary_truncation_mm"] = 1e3 * e.unary_truncation_m;
   job.fingerprint["grid_pixels"] = e.grid_pixels;
   job.fingerprint["proxy_triangles"] = e.proxy_triangles;
+  job.fingerprint["bandwidth_floor_mm"] = 1e3 * e.min_bandwidth_m;
   job.make_worker = [&dataset, &arguments]() -> ItemFunction {
     auto worker = std::make_shared<EstimateWorker>(dataset, arguments);
     return [worker](const datasets::ImageKey& key) { return worker->run(key); };
@@ -342,18 +343,28 @@ void add_estimate_command(CLI::App& app, int* exit_code) {
       ->add_option("--unary-lambda", e.unary_lambda,
                    "lambda_r of Eq. 6 per metre of summed pixel distance (< 0)")
       ->capture_default_str();
+  command->add_option_function<double>(
+      "--unary-truncation-mm", [&e](double mm) { e.unary_truncation_m = 1e-3 * mm; },
+      "per-pixel distance truncation of Eq. 6 (mm, default 40)");
+  command->add_option_function<double>(
+      "--bandwidth-floor-mm", [&e](double mm) { e.min_bandwidth_m = 1e-3 * mm; },
+      "floor of the kernel standard deviation of messages and beliefs (mm)");
   command
       ->add_option("--grid-pixels", e.grid_pixels,
                    "scoring grid: the longer side of a detection box in grid pixels")
       ->capture_default_str();
-  command->add_option("--proxy-triangles", e.proxy_triangles,
-                      "triangles of the decimated models rendered for the unary")
+  command
+      ->add_option("--proxy-triangles", e.proxy_triangles,
+                   "triangles of the decimated models rendered for the unary")
       ->capture_default_str();
   command->add_flag("--save-beliefs", arguments->save_beliefs,
                     "also write the belief samples of every iteration (camera frame, mm)");
   command->add_flag("--no-time", arguments->no_time,
                     "leave time_ms empty and BOP time -1, so outputs are byte-reproducible");
-  command->callback([arguments, exit_code] { run_estimate(*arguments, exit_code); });
+  command->callback([arguments, exit_code] {
+    arguments->estimate.keep_history = arguments->save_beliefs;
+    run_estimate(*arguments, exit_code);
+  });
 }
 
 }  // namespace clutterscope::tools

@@ -40,13 +40,14 @@ struct EstimateOptions {
   bool keep_history = false;  // belief samples of every iteration (--save-beliefs)
   // Unary (Eq. 6): lambda per metre of summed pixel distance, truncation, and the scoring grid
   // size: the stride makes the longer side of the box at most grid_pixels grid pixels.
-  double unary_lambda = -2.0;
-  double unary_truncation_m = 0.02;
+  double unary_lambda = -5.0;
+  double unary_truncation_m = 0.04;
   int grid_pixels = 32;
-  int proxy_triangles = 1500;  // decimated models for scoring
+  int proxy_triangles = 200;  // decimated models for scoring (enough at a 32-px grid)
   double support_z_sigma_m = 0.003;
   double non_contact_floor = 1e-3;
-  double min_bandwidth_m = 0.001;  // floor of the rule-of-thumb kernel standard deviation
+  double min_bandwidth_m =
+      0.005;  // floor of the kernel standard deviation: keeps the K ICP starts apart
   bool IsValid(std::string* why) const;
 };
 
