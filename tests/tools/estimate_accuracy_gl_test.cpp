@@ -1,0 +1,71 @@
+// Acceptance of `clutterscope estimate` on tray scenes with synthetic observations (issue 5):
+// mean position error of the confident estimates <= 1 cm, at most 5% of them off by more than
+// 2 cm, at least 80% of the objects with visibility >= 90% confident, and the median variance
+// of objects below 30% visibility above that of objects above 90%.
+//
+// Runs the default options (M = 100, 15 iterations, K = 20) on the tray6 sample when it is
+// present, else on a generated set of 20 tray scenes of 6 objects (seed 11); about 40 s on
+// 2 cores.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <clutterscope/render/context.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "tools/fake_batch_support.hpp"
+
+namespace clutterscope::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+int run_quiet(const std::string& arguments, std::string* output) {
+  const std::string command = std::string(CLUTTERSCOPE_BINARY) + " " + arguments + " 2>&1";
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return -1;
+  char buffer[4096];
+  std::size_t read = 0;
+  while ((read = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) output->append(buffer, read);
+  const int status = ::pclose(pipe);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(EstimateAccuracyGl, TrayScenesMeetTheAcceptanceCriteria) {
+  std::string why;
+  if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+  fs::path dataset = fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray6";
+  std::string output;
+  if (!fs::exists(dataset / "models" / "models_info.json")) {
+    dataset = testing::fresh_dir("estimate_accuracy_dataset");
+    ASSERT_EQ(run_quiet("generate --out " + dataset.string() +
+                            " --preset tray --scenes 20 --objects 6 --seed 11 --quiet",
+                        &output),
+              0)
+        << output;
+  }
+  const fs::path out = testing::fresh_dir("estimate_accuracy_out");
+  ASSERT_EQ(run_quiet("estimate " + dataset.string() + " --out " + out.string() +
+                          " --jobs 2 --quiet --no-time",
+                      &output),
+            0)
+      << output;
+  const nlohmann::json summary = nlohmann::json::parse(testing::read_file(out / "summary.json"));
+  const nlohmann::json& a = summary.at("accuracy");
+  std::printf("%s: %s\n", dataset.string().c_str(), a.dump().c_str());
+  ASSERT_GE(summary.at("counts").at("confident").get<int>(), 20);
+  EXPECT_LE(a.at("mean_err_cm_confident").get<double>(), 1.0);
+  EXPECT_LE(a.at("fraction_confident_over_2cm").get<double>(), 0.05);
+  ASSERT_GE(a.at("objects_visibility_at_least_90").get<int>(), 10);
+  EXPECT_GE(a.at("fraction_confident_visibility_at_least_90").get<double>(), 0.8);
+  ASSERT_GE(a.at("objects_visibility_below_30").get<int>(), 3)
+      << "the scenes hold too few objects below 30% visibility for the variance criterion";
+  EXPECT_GT(a.at("median_max_var_cm2_visibility_below_30").get<double>(),
+            a.at("median_max_var_cm2_visibility_at_least_90").get<double>());
+}
+
+}  // namespace
+}  // namespace clutterscope::tools
