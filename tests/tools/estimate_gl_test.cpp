@@ -110,6 +110,7 @@ TEST_F(EstimateGl, TiledScoresMatchSingleRendersAndThePointSplatScorer) {
   ASSERT_GE(object, 0);
   const datasets::GtInstance& gt = view.objects[static_cast<std::size_t>(object)];
   render::Instance instance{&cache.proxy(gt.obj_id), gt.model_to_camera, 1};
+  ASSERT_TRUE(instance.mesh->triangle_count() <= 1500);
   const cv::Rect box = render::Renderer::projected_rect(image, instance);
   estimator::BoxObservation observation;
   observation.camera_matrix = view.camera.K;
@@ -138,6 +139,18 @@ TEST_F(EstimateGl, TiledScoresMatchSingleRendersAndThePointSplatScorer) {
   ASSERT_TRUE(tiled.allFinite());
   // Same rasterisation per tile; depths may differ in the last float bits only.
   EXPECT_LT((tiled - single).cwiseAbs().maxCoeff(), 1e-4);
+
+  // The scorer's cost equals estimator::pixel_cost (Eq. 6) on the same synthetic depth.
+  for (int h = 0; h < 3; ++h) {
+    render::Instance placed = instance;
+    placed.model_to_camera.translation() = translations.col(h);
+    const cv::Mat depth = renderer.render(scoring_grid_intrinsics(observation), {placed}).depth;
+    const std::vector<float> synthetic(depth.begin<float>(), depth.end<float>());
+    EXPECT_NEAR(single[h],
+                cost.lambda * estimator::pixel_cost(observation, synthetic, cost.truncation),
+                1e-6 * std::abs(single[h]))
+        << "hypothesis " << h;
+  }
 
   // The CPU reference: dense points on the same proxy mesh splatted on the same grid. The two
   // differ only at silhouette edges (a splat covers a grid pixel its points fall in, the

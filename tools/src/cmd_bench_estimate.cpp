@@ -100,6 +100,8 @@ void run_bench(const BenchEstimateArguments& arguments) {
   std::mt19937_64 rng(arguments.seed);
   std::normal_distribution<double> noise(0.0, 0.01);
   double tiled = 0, single = 0, max_difference = 0;
+  const double render_before = estimator.scorer().render_seconds();
+  const double cost_before = estimator.scorer().cost_seconds();
   long scored = 0;
   for (const ObjectEstimate& object : reference.objects) {
     if (!object.observation) continue;
@@ -122,6 +124,11 @@ void run_bench(const BenchEstimateArguments& arguments) {
     }
     max_difference = std::max(max_difference, (a - b).cwiseAbs().maxCoeff());
   }
+  std::printf(
+      "  of the tiled scoring: render + readback %.1f us/hypothesis, pixel costs %.1f "
+      "us/hypothesis\n",
+      1e6 * (estimator.scorer().render_seconds() - render_before) / scored,
+      1e6 * (estimator.scorer().cost_seconds() - cost_before) / scored);
   std::printf(
       "unary scoring of %ld hypotheses: tiled %.1f us/hypothesis, one render + readback per "
       "hypothesis %.1f us/hypothesis, speed-up %.1fx (target >= 5x); max |log phi| difference "

@@ -1,9 +1,14 @@
 #include "clutterscope/tools/estimate/render_scorer.hpp"
 
+#include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
 namespace clutterscope::tools {
+
+using Clock = std::chrono::steady_clock;
 
 render::Intrinsics scoring_grid_intrinsics(const estimator::BoxObservation& o) {
   const double s = o.stride;
@@ -28,15 +33,45 @@ RenderHypothesisScorer::RenderHypothesisScorer(render::Renderer& renderer,
   if (!options.IsValid(&why)) throw std::invalid_argument("pixel cost: " + why);
 }
 
+void RenderHypothesisScorer::prepare_grid(const estimator::BoxObservation& o) {
+  if (prepared_ == &o && prepared_depth_ == o.depth) return;
+  prepared_ = &o;
+  prepared_depth_ = o.depth;
+  const int gw = (o.width + o.stride - 1) / o.stride, gh = (o.height + o.stride - 1) / o.stride;
+  grid_observed_.resize(static_cast<std::size_t>(gw) * gh);
+  grid_ray_length_.resize(grid_observed_.size());
+  const Eigen::Matrix3d& k = o.camera_matrix;
+  for (int j = 0; j < gh; ++j) {
+    for (int i = 0; i < gw; ++i) {
+      const std::size_t g = static_cast<std::size_t>(j) * gw + i;
+      grid_observed_[g] = o.depth[static_cast<std::size_t>(j) * o.stride * o.width + i * o.stride];
+      const double u = o.x + i * o.stride + 0.5, v = o.y + j * o.stride + 0.5;
+      grid_ray_length_[g] =
+          Eigen::Vector3d((u - k(0, 2)) / k(0, 0), (v - k(1, 2)) / k(1, 1), 1.0).norm();
+    }
+  }
+}
+
 double RenderHypothesisScorer::tile_log_likelihood(const estimator::BoxObservation& observation,
                                                    const cv::Mat& tile_depth) {
-  synthetic_.resize(static_cast<std::size_t>(tile_depth.rows) * tile_depth.cols);
+  prepare_grid(observation);
+  const double truncation = options_.truncation;
+  double total = 0;
   for (int r = 0; r < tile_depth.rows; ++r) {
-    const float* row = tile_depth.ptr<float>(r);
-    std::copy(row, row + tile_depth.cols, synthetic_.begin() + std::size_t(r) * tile_depth.cols);
+    const float* synthetic = tile_depth.ptr<float>(r);
+    const std::size_t row = static_cast<std::size_t>(r) * tile_depth.cols;
+    for (int c = 0; c < tile_depth.cols; ++c) {
+      const double observed = grid_observed_[row + c];
+      if (observed > 0 && synthetic[c] > 0) {
+        total +=
+            std::min(std::abs(observed - synthetic[c]) * grid_ray_length_[row + c], truncation);
+      } else {
+        total += truncation;
+      }
+    }
   }
   ++hypotheses_scored_;
-  return options_.lambda * estimator::pixel_cost(observation, synthetic_, options_.truncation);
+  return options_.lambda * total;
 }
 
 void RenderHypothesisScorer::score(int obj_id, const Eigen::Matrix3d& rotation,
@@ -57,11 +92,15 @@ void RenderHypothesisScorer::score(int obj_id, const Eigen::Matrix3d& rotation,
   }
   log_likelihoods->resize(translations.cols());
   if (translations.cols() == 0) return;
+  const Clock::time_point start = Clock::now();
   const render::TileAtlas atlas = renderer_.render_tiles(requests_);
+  const Clock::time_point rendered = Clock::now();
   for (int h = 0; h < translations.cols(); ++h) {
     (*log_likelihoods)[h] =
         tile_log_likelihood(observation, atlas.depth(static_cast<std::size_t>(h)));
   }
+  render_seconds_ += std::chrono::duration<double>(rendered - start).count();
+  cost_seconds_ += std::chrono::duration<double>(Clock::now() - rendered).count();
 }
 
 void RenderHypothesisScorer::score_one_by_one(int obj_id, const Eigen::Matrix3d& rotation,

@@ -34,16 +34,27 @@ class RenderHypothesisScorer : public estimator::HypothesisScorer {
                         Eigen::VectorXd* log_likelihoods);
 
   long hypotheses_scored() const { return hypotheses_scored_; }
+  // Time spent rendering (with readback) and computing pixel costs, since construction.
+  double render_seconds() const { return render_seconds_; }
+  double cost_seconds() const { return cost_seconds_; }
 
  private:
   double tile_log_likelihood(const estimator::BoxObservation& observation,
                              const cv::Mat& tile_depth);
+  // Per grid pixel: observed depth and the length of the pixel's ray at unit depth, so that
+  // |P_obs - P_syn| = |z_obs - z_syn| * ray_length (estimator::pixel_cost, without the
+  // per-pixel back-projection).
+  void prepare_grid(const estimator::BoxObservation& observation);
   render::Renderer& renderer_;
   render::ModelCache& models_;
   estimator::PixelCostOptions options_;
   std::vector<render::TileRequest> requests_;
-  std::vector<float> synthetic_;
+  const estimator::BoxObservation* prepared_ = nullptr;
+  std::vector<float>
+      prepared_depth_;  // a copy, to notice a different observation at the same address
+  std::vector<double> grid_observed_, grid_ray_length_;
   long hypotheses_scored_ = 0;
+  double render_seconds_ = 0, cost_seconds_ = 0;
 };
 
 }  // namespace clutterscope::tools
