@@ -215,6 +215,22 @@ TEST_F(ReportCli, AnInterruptedReportResumesWhereItStopped) {
   EXPECT_TRUE(read_text(dir / "report.html") == first_bytes_->at("report.html"));
 }
 
+TEST_F(ReportCli, KeepGoingReportsTheImagesThatFailed) {
+  const fs::path broken = *root_ / "dataset_broken";
+  fs::copy(dataset(), broken, fs::copy_options::recursive);
+  std::ofstream(broken / "test" / "000001" / "depth" / "000000.png", std::ios::trunc) << "no png";
+  const fs::path dir = *root_ / "keep_going";
+  ASSERT_EQ(run(report_arguments(broken, dir)).exit_code, 3);  // without --keep-going
+  const CommandRun kept = run(report_arguments(broken, dir, " --keep-going"));
+  EXPECT_EQ(kept.exit_code, 1) << kept.errors;
+  const nlohmann::json summary = read_json(dir / "summary.json");
+  EXPECT_EQ(summary.at("counts").at("images").get<int>(), 1);
+  const nlohmann::json& failed = summary.at("run").at("failed_images").at("estimate");
+  ASSERT_EQ(failed.size(), 1u);
+  EXPECT_EQ(failed.at(0).at("scene_id").get<int>(), 1);
+  EXPECT_TRUE(fs::exists(dir / "report.html"));
+}
+
 TEST_F(ReportCli, RefusesAFolderOfAnotherDatasetOrOtherOptions) {
   const fs::path copy = *root_ / "dataset_copy";
   fs::copy(dataset(), copy, fs::copy_options::recursive | fs::copy_options::overwrite_existing);

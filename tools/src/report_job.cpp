@@ -119,9 +119,14 @@ nlohmann::ordered_json run_record(const ReportArguments& arguments, const fs::pa
   run["command"] = "report";
   run["tool_version"] = CLUTTERSCOPE_VERSION;
   run["dataset"] = dataset_fingerprint(arguments.dataset);
+  nlohmann::ordered_json failures;
   for (const char* step : {"visibility", "estimate"}) {
-    run[std::string(step) + "_options"] = read_json(dir / step / "summary.json").at("options");
+    const nlohmann::json summary = read_json(dir / step / "summary.json");
+    run[std::string(step) + "_options"] = summary.at("options");
+    // Images that failed under --keep-going are missing from the report: list them.
+    failures[step] = summary.at("counts").at("failures");
   }
+  run["failed_images"] = failures;
   const report::ReportOptions& analysis = arguments.analysis;
   run["analysis"] = {{"accurate_cm", analysis.accurate_cm},
                      {"variance_threshold_cm2", analysis.variance_threshold_cm2},
