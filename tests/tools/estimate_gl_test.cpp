@@ -328,5 +328,21 @@ TEST_F(EstimateGl, BadInputIsRecordedPerObjectWithoutNaN) {
   }
 }
 
+TEST_F(EstimateGl, WithoutGraphAndDepthInfersTheGraphAndSimulatesTheSensor) {
+  const fs::path data = copy_dataset(*dataset_, "estimate_bare_dataset");
+  for (const char* scene : {"000000", "000001"}) {
+    fs::remove(data / "test" / scene / "scene_graph.json");
+    fs::remove_all(data / "test" / scene / "depth");
+  }
+  const fs::path out = fresh_dir("estimate_bare_out");
+  const CommandRun result = run("estimate " + data.string() + " --out " + out.string() + kFast);
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const nlohmann::json counts = nlohmann::json::parse(read_file(out / "summary.json")).at("counts");
+  EXPECT_EQ(counts.at("images_with_inferred_graph"), 2);
+  EXPECT_EQ(counts.at("images_with_synthetic_depth"), 2);
+  EXPECT_EQ(counts.at("images_with_synthetic_detections"), 2);
+  EXPECT_GE(counts.at("estimated").get<int>(), 6);
+}
+
 }  // namespace
 }  // namespace clutterscope::tools

@@ -175,6 +175,8 @@ class EstimateSummary : public SummaryBuilder {
     if (!record.ok) return;
     ++images_;
     if (record.summary.at("graph_inferred").get<bool>()) ++graphs_inferred_;
+    if (record.summary.at("observation") == "synthetic") ++synthetic_observations_;
+    if (record.summary.at("detections") == "synthetic") ++synthetic_detections_;
     for (const auto& message : record.summary.at("image_failures")) {
       image_failures_.push_back({{"split", record.key.split},
                                  {"scene_id", record.key.scene_id},
@@ -220,6 +222,8 @@ class EstimateSummary : public SummaryBuilder {
     summary["counts"] = totals.to_json();
     summary["counts"]["images_computed"] = images_;
     summary["counts"]["images_with_inferred_graph"] = graphs_inferred_;
+    summary["counts"]["images_with_synthetic_depth"] = synthetic_observations_;
+    summary["counts"]["images_with_synthetic_detections"] = synthetic_detections_;
     summary["counts"]["objects"] = objects_;
     summary["counts"]["estimated"] = estimated_;
     summary["counts"]["confident"] = confident_errors_.size();
@@ -261,6 +265,7 @@ class EstimateSummary : public SummaryBuilder {
  private:
   nlohmann::json fingerprint_;
   long images_ = 0, graphs_inferred_ = 0, objects_ = 0, estimated_ = 0;
+  long synthetic_observations_ = 0, synthetic_detections_ = 0;
   long confident_over_2cm_ = 0, high_visibility_ = 0, high_visibility_confident_ = 0;
   std::vector<double> errors_, confident_errors_, low_variances_, high_variances_;
   nlohmann::json object_failures_ = nlohmann::json::array();
