@@ -307,6 +307,7 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
   job.fingerprint["grid_pixels"] = e.grid_pixels;
   job.fingerprint["proxy_triangles"] = e.proxy_triangles;
   job.fingerprint["bandwidth_floor_mm"] = 1e3 * e.min_bandwidth_m;
+  job.fingerprint["icp_max_distance_mm"] = 1e3 * e.icp_max_distance_m;
   job.make_worker = [&dataset, &arguments]() -> ItemFunction {
     auto worker = std::make_shared<EstimateWorker>(dataset, arguments);
     return [worker](const datasets::ImageKey& key) { return worker->run(key); };
@@ -351,6 +352,9 @@ void add_estimate_command(CLI::App& app, int* exit_code) {
   command->add_option_function<double>(
       "--unary-truncation-mm", [&e](double mm) { e.unary_truncation_m = 1e-3 * mm; },
       "per-pixel distance truncation of Eq. 6 (mm, default 40)");
+  command->add_option_function<double>(
+      "--icp-max-distance-mm", [&e](double mm) { e.icp_max_distance_m = 1e-3 * mm; },
+      "ICP ignores observed points farther than this from the model (mm, default 10)");
   command->add_option_function<double>(
       "--bandwidth-floor-mm", [&e](double mm) { e.min_bandwidth_m = 1e-3 * mm; },
       "floor of the kernel standard deviation of messages and beliefs (mm)");

@@ -170,6 +170,7 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (!(unary_truncation_m > 0)) return fail("unary truncation must be > 0");
   if (grid_pixels < 4) return fail("scoring grid must be >= 4 pixels");
   if (proxy_triangles < 12) return fail("proxy triangles must be >= 12");
+  if (!(icp_max_distance_m > 0)) return fail("ICP correspondence distance must be > 0");
   if (!(support_z_sigma_m > 0) || !(non_contact_floor > 0) || !(min_bandwidth_m > 0))
     return fail("support sigma, non-contact floor and bandwidth floor must be > 0");
   return true;
@@ -451,6 +452,8 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
   // Post-processing: K belief samples refined by ICP in the camera frame, fused.
   const Clock::time_point icp_start = Clock::now();
   const double threshold_m2 = options.variance_threshold_cm2 * 1e-4;
+  estimator::IcpOptions icp_options;
+  icp_options.max_correspondence_distance = options.icp_max_distance_m;
   for (ObjectEstimate& object : result.objects) {
     const int node = node_of[static_cast<std::size_t>(object.gt_id)];
     const Eigen::Vector3d truth = support_to_camera * position[object.gt_id];
@@ -464,7 +467,7 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
     object.effective_sample_size = estimator::effective_sample_size(belief.weights);
     const estimator::TranslationIcp icp(
         object.rotation * (s.model_points(object.obj_id).colwise() - object.model_centre),
-        estimator::IcpOptions{});
+        icp_options);
     const Eigen::Matrix3Xd observed = observed_points(*object.observation, kIcpObservedPoints);
     const Eigen::MatrixXd starts = estimator::sample_mixture(belief, options.icp_samples, rng);
     std::vector<Eigen::Vector3d> fits;
