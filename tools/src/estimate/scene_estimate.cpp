@@ -445,8 +445,18 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
     nbp_options.gibbs_sweeps = options.gibbs_sweeps;
     nbp_options.min_bandwidth_variance = min_variance;
     nbp_options.keep_history = options.keep_history;
-    nbp = estimator::run_nbp(mrf, nbp_options, rng);
-    result.nbp = nbp.summary;
+    try {
+      nbp = estimator::run_nbp(mrf, nbp_options, rng);
+      result.nbp = nbp.summary;
+    } catch (const std::invalid_argument& error) {
+      // A degenerate MRF (e.g. an initial mixture the core rejects): every object of the image
+      // is recorded as failed rather than failing the image.
+      for (ObjectEstimate& object : result.objects) {
+        if (node_of[static_cast<std::size_t>(object.gt_id)] < 0) continue;
+        object.failure = std::string("belief propagation failed: ") + error.what();
+        node_of[static_cast<std::size_t>(object.gt_id)] = -1;
+      }
+    }
   }
 
   // Post-processing: K belief samples refined by ICP in the camera frame, fused.
@@ -476,7 +486,14 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
       // Fits in the support frame, so that variances are per support-frame axis.
       fits.push_back(camera_to_support * icp.align(observed, start_camera).position);
     }
-    const estimator::FusedEstimate fused = estimator::fuse_fits(fits, threshold_m2);
+    estimator::FusedEstimate fused;
+    try {
+      fused = estimator::fuse_fits(fits, threshold_m2);
+    } catch (const std::invalid_argument& error) {  // non-finite fits
+      object.failure = std::string("ICP post-processing failed: ") + error.what();
+      object.initial_error_m.reset();
+      continue;
+    }
     object.position = support_to_camera * fused.mean;
     object.variance = fused.variance;
     object.confident = fused.confident;
