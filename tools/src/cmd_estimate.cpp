@@ -353,9 +353,6 @@ void add_estimate_command(CLI::App& app, int* exit_code) {
       "--unary-truncation-mm", [&e](double mm) { e.unary_truncation_m = 1e-3 * mm; },
       "per-pixel distance truncation of Eq. 6 (mm, default 40)");
   command->add_option_function<double>(
-      "--icp-max-distance-mm", [&e](double mm) { e.icp_max_distance_m = 1e-3 * mm; },
-      "ICP ignores observed points farther than this from the model (mm, default 10)");
-  command->add_option_function<double>(
       "--bandwidth-floor-mm", [&e](double mm) { e.min_bandwidth_m = 1e-3 * mm; },
       "floor of the kernel standard deviation of messages and beliefs (mm)");
   command
