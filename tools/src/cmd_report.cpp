@@ -43,6 +43,7 @@ const std::vector<StepOption>& step_options() {
       {"estimate", "--grid-pixels", false, "estimate: scoring grid size"},
       {"estimate", "--proxy-triangles", false, "estimate: triangles of the scoring models"},
       {"estimate", "--bandwidth-floor-mm", false, "estimate: floor of the kernel bandwidth"},
+      {"estimate", "--icp-max-distance-mm", false, "estimate: ICP correspondence distance"},
       {"estimate", "--save-beliefs", true,
        "estimate: also write the belief samples of every iteration"},
       {"estimate", "--no-time", true,
