@@ -354,7 +354,7 @@ void add_estimate_command(CLI::App& app, int* exit_code) {
       "per-pixel distance truncation of Eq. 6 (mm, default 40)");
   command->add_option_function<double>(
       "--bandwidth-floor-mm", [&e](double mm) { e.min_bandwidth_m = 1e-3 * mm; },
-      "floor of the kernel standard deviation of messages and beliefs (mm)");
+      "floor of the kernel standard deviation of messages and beliefs (mm, default 5)");
   command
       ->add_option("--grid-pixels", e.grid_pixels,
                    "scoring grid: the longer side of a detection box in grid pixels")
