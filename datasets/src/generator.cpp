@@ -77,6 +77,40 @@ bool inside(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& 
   return true;
 }
 
+// The part of an object that certainly blocks light, as an upright box in its model frame.
+Eigen::AlignedBox3d occluding_box(const CatalogueItem& item) {
+  Eigen::Vector3d half = item.size / 2;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  if (item.shape == ShapeKind::kCylinder || item.shape == ShapeKind::kBottle) {
+    half.x() = half.y() = item.size.x() / 2 / std::sqrt(2.0);
+  }
+  if (item.shape == ShapeKind::kBottle) {  // the body: the lower 65 %
+    half.z() = 0.65 * item.size.z() / 2;
+    centre.z() = -item.size.z() / 2 + half.z();
+  }
+  return Eigen::AlignedBox3d(centre - half, centre + half);
+}
+
+// Whether the segment from `from` to `to` (model frame) passes through `box` before `to`.
+bool segment_hits(const Eigen::AlignedBox3d& box, const Eigen::Vector3d& from,
+                  const Eigen::Vector3d& to) {
+  const Eigen::Vector3d direction = to - from;
+  double enter = 0.0, leave = 1.0 - 1e-9;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (std::abs(direction[axis]) < 1e-15) {
+      if (from[axis] < box.min()[axis] || from[axis] > box.max()[axis]) return false;
+      continue;
+    }
+    double t0 = (box.min()[axis] - from[axis]) / direction[axis];
+    double t1 = (box.max()[axis] - from[axis]) / direction[axis];
+    if (t0 > t1) std::swap(t0, t1);
+    enter = std::max(enter, t0);
+    leave = std::min(leave, t1);
+    if (enter > leave) return false;
+  }
+  return true;
+}
+
 struct Placement {
   PlacedObject object;
   SupportBox box;
@@ -100,6 +134,39 @@ class LayoutBuilder {
     placement.flat_top = catalogue_[item].flat_top;
     if (!placed_.empty()) placement.parents.push_back(static_cast<int>(placed_.size()) - 1);
     placed_.push_back(placement);
+  }
+
+  // Tries placements of `item` behind the taller objects already placed, as seen from `eye`,
+  // until one is completely hidden; false (nothing placed) when none is.
+  bool place_hidden(int item, const Eigen::Vector3d& eye, std::mt19937_64& rng) {
+    const int base = static_cast<int>(placed_.size()) - 1 - movable_count_;
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::vector<int> occluders;
+    for (std::size_t i = base + 1; i < placed_.size(); ++i) {
+      if (placed_[i].box.top > placed_[base].box.top) occluders.push_back(static_cast<int>(i));
+    }
+    if (occluders.empty()) return false;
+    const Eigen::Vector3d& size = catalogue_[item].size;
+    for (int attempt = 0; attempt < options_.attempts_per_object; ++attempt) {
+      const Placement& occluder =
+          placed_[occluders[static_cast<std::size_t>(unit(rng) *
+                                                     static_cast<double>(occluders.size())) %
+                            occluders.size()]];
+      const Eigen::Vector2d at = occluder.object.model_to_world.translation().head<2>();
+      const Eigen::Vector2d away = (at - eye.head<2>()).normalized();
+      const Eigen::Vector2d across(-away.y(), away.x());
+      const double reach =
+          catalogue_[occluder.object.item].size.head<2>().norm() / 2 + size.head<2>().norm() / 2;
+      const Eigen::Vector2d centre =
+          at + away * reach * (0.6 + 0.8 * unit(rng)) + across * reach * (unit(rng) - 0.5) * 0.6;
+      if (!try_at(item, centre, 2.0 * kPi * unit(rng), base)) continue;
+      std::vector<PlacedObject> objects;
+      for (const auto& placement : placed_) objects.push_back(placement.object);
+      if (hidden_from(catalogue_, objects, objects.size() - 1, eye)) return true;
+      placed_.pop_back();
+      --movable_count_;
+    }
+    return false;
   }
 
   // Tries random upright placements of `item`; false when none is valid.
@@ -307,6 +374,9 @@ bool LayoutOptions::IsValid(const std::vector<CatalogueItem>& catalogue, std::st
     return fail("stack probability must be <= 1, got " + std::to_string(stack_probability));
   }
   if (!(near_distance_m >= 0)) return fail("near distance must be >= 0 m");
+  if (hide_objects < 0) {
+    return fail("hidden objects must be >= 0, got " + std::to_string(hide_objects));
+  }
   bool has_movable = false;
   for (const auto& item : catalogue) has_movable = has_movable || !item.fixed;
   if (!has_movable) return fail("the catalogue has no movable item");
@@ -328,6 +398,40 @@ Camera default_camera(int width, int height) {
   camera.K << focal, 0, width / 2.0, 0, focal, height / 2.0, 0, 0, 1;
   camera.depth_scale = 0.1;  // 0.1 mm per PNG unit: 6.5 m range in 16 bits
   return camera;
+}
+
+bool hidden_from(const std::vector<CatalogueItem>& catalogue,
+                 const std::vector<PlacedObject>& objects, std::size_t object,
+                 const Eigen::Vector3d& eye) {
+  const PlacedObject& target = objects[object];
+  const Eigen::Vector3d half = catalogue[target.item].size / 2;
+  const Eigen::Vector3d eye_local = target.model_to_world.inverse() * eye;
+  constexpr int kGrid = 5;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (double side : {-1.0, 1.0}) {
+      // Only faces that look at the camera can be seen.
+      if ((eye_local[axis] - side * half[axis]) * side <= 0) continue;
+      const int u_axis = (axis + 1) % 3, v_axis = (axis + 2) % 3;
+      for (int i = 0; i < kGrid; ++i) {
+        for (int j = 0; j < kGrid; ++j) {
+          Eigen::Vector3d local;
+          local[axis] = side * half[axis];
+          local[u_axis] = (2.0 * i / (kGrid - 1) - 1.0) * half[u_axis];
+          local[v_axis] = (2.0 * j / (kGrid - 1) - 1.0) * half[v_axis];
+          const Eigen::Vector3d point = target.model_to_world * local;
+          bool blocked = false;
+          for (std::size_t o = 0; o < objects.size() && !blocked; ++o) {
+            if (o == object || objects[o].fixed) continue;
+            const Eigen::Isometry3d world_to_model = objects[o].model_to_world.inverse();
+            blocked = segment_hits(occluding_box(catalogue[objects[o].item]), world_to_model * eye,
+                                   world_to_model * point);
+          }
+          if (!blocked) return false;
+        }
+      }
+    }
+  }
+  return true;
 }
 
 Eigen::Isometry3d look_at(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
@@ -388,8 +492,14 @@ GeneratedScene generate_layout(const std::vector<CatalogueItem>& catalogue,
       const int tray = find_item(catalogue, "tray");
       builder.add_fixed(tray, Eigen::Vector3d(0, 0, kTableTopZ + catalogue[tray].size.z() / 2));
     }
+    // Views first: hidden placements aim at the first camera.
+    const std::vector<Eigen::Isometry3d> views = sample_views(options.preset, options.views, rng);
+    const Eigen::Vector3d eye = views.front().inverse().translation();
     bool complete = true;
-    for (int item : items) {
+    for (std::size_t k = 0; k < items.size(); ++k) {
+      const int item = items[k];
+      const bool hide = k + static_cast<std::size_t>(options.hide_objects) >= items.size();
+      if (hide && builder.place_hidden(item, eye, rng)) continue;
       if (!builder.place(item, rng)) {
         complete = false;
         break;
@@ -411,7 +521,7 @@ GeneratedScene generate_layout(const std::vector<CatalogueItem>& catalogue,
     std::sort(scene.graph.support.begin(), scene.graph.support.end());
     scene.graph.non_contact =
         non_contact_pairs(bounds, scene.graph.fixed, scene.graph.support, options.near_distance_m);
-    scene.world_to_camera = sample_views(options.preset, options.views, rng);
+    scene.world_to_camera = views;
     return scene;
   }
   throw GenerationError("could not place " + std::to_string(count) + " objects in " +

@@ -340,6 +340,62 @@ TEST(Generator, ThousandScenesOfTenObjectsRunInConstantMemory) {
       << "RSS grew from " << after_warm_up << " to " << at_end << " KiB";
 }
 
+PlacedObject placed(const std::vector<CatalogueItem>& catalogue, const std::string& name, double x,
+                    double y) {
+  const int item = find_item(catalogue, name);
+  PlacedObject object;
+  object.item = item;
+  object.obj_id = catalogue[item].obj_id;
+  object.model_to_world.translation() = Eigen::Vector3d(x, y, catalogue[item].size.z() / 2);
+  return object;
+}
+
+TEST(Generator, HiddenFromMatchesHandMadeOcclusions) {
+  auto catalogue = default_catalogue();
+  CatalogueItem wall;
+  wall.name = "wall";
+  wall.size = Eigen::Vector3d(0.05, 0.4, 0.3);
+  catalogue.push_back(wall);
+  const Eigen::Vector3d eye(-0.6, 0.0, 0.5);
+  // A tuna can (33 mm tall) right behind a 0.3 m high wall: every ray to it hits the wall.
+  std::vector<PlacedObject> objects = {placed(catalogue, "wall", 0.0, 0.0),
+                                       placed(catalogue, "tuna_can", 0.08, 0.0)};
+  EXPECT_TRUE(hidden_from(catalogue, objects, 1, eye));
+  // Beside the wall: visible.
+  objects[1].model_to_world.translation().y() = 0.3;
+  EXPECT_FALSE(hidden_from(catalogue, objects, 1, eye));
+  // Far behind the wall: the rays pass over it.
+  objects[1].model_to_world.translation() = Eigen::Vector3d(1.5, 0.0, 0.0165);
+  EXPECT_FALSE(hidden_from(catalogue, objects, 1, eye));
+  // Straight behind the 180 mm tall oats container, the 101 mm soup can is hidden even by the
+  // container's inscribed square (the ray to its far top edge crosses x = 46 mm at z = 149 mm).
+  objects = {placed(catalogue, "oats_container", 0.0, 0.0), placed(catalogue, "soup_can", 0.1, 0)};
+  EXPECT_TRUE(hidden_from(catalogue, objects, 1, eye));
+  // A round occluder counts only its inscribed square (conservative): shifted 40 mm sideways,
+  // the can's edge projects between the square (46 mm) and the cylinder (65 mm), so it counts
+  // as visible.
+  objects[1].model_to_world.translation().y() = 0.04;
+  EXPECT_FALSE(hidden_from(catalogue, objects, 1, eye));
+}
+
+TEST(Generator, HidesObjectsFromTheFirstViewWhenAsked) {
+  const auto catalogue = default_catalogue();
+  LayoutOptions options;
+  options.hide_objects = 2;
+  options.min_objects = options.max_objects = 8;
+  int hidden = 0, scenes = 60;
+  for (int s = 0; s < scenes; ++s) {
+    std::mt19937_64 rng = derive_rng(11, s, 0);
+    const GeneratedScene scene = generate_layout(catalogue, options, rng);
+    const Eigen::Vector3d eye = scene.world_to_camera.front().inverse().translation();
+    for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+      if (!scene.objects[i].fixed && hidden_from(catalogue, scene.objects, i, eye)) ++hidden;
+    }
+  }
+  std::cout << hidden << " hidden objects in " << scenes << " scenes\n";
+  EXPECT_GE(hidden, scenes / 4);
+}
+
 TEST(Catalogue, HasTwelveHouseholdItemsTrayAndTable) {
   const auto catalogue = default_catalogue();
   int movable = 0;

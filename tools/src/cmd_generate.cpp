@@ -109,6 +109,11 @@ void add_generate_command(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   command->add_option("--views", options.layout.views, "camera views per scene")
       ->capture_default_str();
+  command
+      ->add_option("--hidden", options.layout.hide_objects,
+                   "try to hide this many objects per scene completely from the first view "
+                   "(behind taller ones)")
+      ->capture_default_str();
   command->add_option("--seed", options.seed, "master random seed")->capture_default_str();
   command->add_option("--width", options.width, "image width (px)")->capture_default_str();
   command->add_option("--height", options.height, "image height (px)")->capture_default_str();

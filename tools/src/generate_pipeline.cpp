@@ -47,6 +47,7 @@ nlohmann::json GenerateOptions::to_json() const {
   json["objects"] = {layout.min_objects, layout.max_objects};
   json["max_stack"] = layout.max_stack;
   json["views"] = layout.views;
+  json["hidden"] = layout.hide_objects;
   json["seed"] = seed;
   json["width"] = width;
   json["height"] = height;

@@ -48,6 +48,9 @@ struct LayoutOptions {
   int attempts_per_object = 400;  // random placements tried before restarting the scene
   int attempts_per_scene = 25;    // restarts before giving up
   double near_distance_m = 0.05;  // non_contact pairs closer than this
+  // The last `hide_objects` objects placed (the smallest) are first tried behind taller ones
+  // until the first view sees none of them; an object that cannot be hidden is placed normally.
+  int hide_objects = 0;
 
   // Checks ranges (min <= max, L >= 1, views >= 1, objects >= 1, ...) and that the request
   // fits: at most layout_capacity() objects.
@@ -83,6 +86,13 @@ GeneratedScene generate_layout(const std::vector<CatalogueItem>& catalogue,
 // The random stream of one (scene, task) of a run with master seed `seed`: independent of the
 // order scenes are generated in.
 std::mt19937_64 derive_rng(std::uint64_t seed, std::uint64_t scene, std::uint64_t task);
+
+// True when every point of the camera-facing faces of `object`'s box (a 5 x 5 grid per face) is
+// behind another object of `scene` seen from `eye` (world). Occluders are conservative: boxes as
+// they are, cylinders as their inscribed square prism, bottles as that prism of the body only.
+bool hidden_from(const std::vector<CatalogueItem>& catalogue,
+                 const std::vector<PlacedObject>& objects, std::size_t object,
+                 const Eigen::Vector3d& eye);
 
 // Camera looking from `eye` at `target` (world, z up), OpenCV axes: x right, y down, z forward.
 Eigen::Isometry3d look_at(const Eigen::Vector3d& eye, const Eigen::Vector3d& target);
