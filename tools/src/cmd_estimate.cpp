@@ -90,7 +90,7 @@ class EstimateWorker {
         row.add(100 * *object.error_m, 4).add(100 * *object.initial_error_m, 4);
         row.add(object.effective_sample_size, 2);
       } else {
-        for (int column = 0; column < 11; ++column) row.add("");
+        for (int column = 0; column < 10; ++column) row.add("");  // x_mm .. ess_min
       }
       if (arguments_.no_time) {
         row.add("");
