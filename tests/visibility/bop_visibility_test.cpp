@@ -286,6 +286,9 @@ TEST_F(BopDepthFile, WrongSizeAndMissingFileAreDatasetErrors) {
   const std::string color = (dir_ / "color.png").string();
   ASSERT_TRUE(cv::imwrite(color, cv::Mat(2, 3, CV_8UC3, cv::Scalar(1, 2, 3))));
   EXPECT_THROW(load_bop_depth_mm(color, 1.0, 3, 2, ""), datasets::DatasetError);
+  const std::string eight_bit = (dir_ / "eight_bit.png").string();
+  ASSERT_TRUE(cv::imwrite(eight_bit, cv::Mat(2, 3, CV_8U, cv::Scalar(7))));
+  EXPECT_THROW(load_bop_depth_mm(eight_bit, 1.0, 3, 2, ""), datasets::DatasetError);
 }
 
 }  // namespace

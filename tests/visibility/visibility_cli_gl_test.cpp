@@ -245,11 +245,12 @@ TEST_F(VisibilityCli, MissingDepthInBopMode) {
   options.write_depth = false;
   options.write_camera_json = true;  // the image size then comes from camera.json
   const fs::path data = dataset(options);
-  const RunResult run = run_cli(
-      "visibility " + quoted(data) + " --mode bop19 -q --out " + quoted(scratch_.path() / "out"),
-      scratch_.path());
+  const RunResult run = run_cli("visibility " + quoted(data) + " --mode bop19 -q --jobs 1 --out " +
+                                    quoted(scratch_.path() / "out"),
+                                scratch_.path());
   EXPECT_EQ(run.exit_code, 3);
   EXPECT_NE(run.err.find("depth"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("000001/depth/000000.png"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("scene 1, image 0"), std::string::npos) << run.err;
   // Rendered mode does not need the measured depth.
   EXPECT_EQ(run_cli("visibility " + quoted(data) + " -q --out " + quoted(scratch_.path() / "r"),

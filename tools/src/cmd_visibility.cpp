@@ -17,6 +17,7 @@
 #include <clutterscope/visibility/overlay.hpp>
 #include <clutterscope/visibility/scene_gt_info.hpp>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -128,7 +129,12 @@ class VisibilityWorker {
     const std::string where = datasets::location(key.scene_id, key.im_id);
     cv::Mat measured_mm;
     if (options_.is_bop()) {
-      measured_mm = visibility::load_bop_depth_mm(view.depth_path.string(), view.camera.depth_scale,
+      // Name the file BOP expects when the image has none, so the error says where to look.
+      char expected[32];
+      std::snprintf(expected, sizeof expected, "%06d/depth/%06d.png", key.scene_id, key.im_id);
+      const std::filesystem::path depth_path =
+          view.depth_path.empty() ? dataset_.root() / key.split / expected : view.depth_path;
+      measured_mm = visibility::load_bop_depth_mm(depth_path.string(), view.camera.depth_scale,
                                                   view.camera.width, view.camera.height, where);
     }
     std::vector<render::Instance> instances;

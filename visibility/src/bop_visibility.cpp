@@ -142,10 +142,11 @@ cv::Mat load_bop_depth_mm(const std::string& path, double depth_scale, int width
   }
   const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
   if (raw.empty()) throw datasets::DatasetError(path, where + "depth image cannot be read");
-  if (raw.channels() != 1 ||
-      (raw.depth() != CV_16U && raw.depth() != CV_8U && raw.depth() != CV_32F)) {
+  // BOP depth is 16-bit PNG (32-bit float TIFF in a few datasets); an 8-bit image is a
+  // conversion mistake that would silently give wrong counts.
+  if (raw.channels() != 1 || (raw.depth() != CV_16U && raw.depth() != CV_32F)) {
     throw datasets::DatasetError(
-        path, where + "depth image must be single-channel 8/16-bit integer or 32-bit float, got " +
+        path, where + "depth image must be single-channel 16-bit integer or 32-bit float, got " +
                   std::to_string(raw.channels()) + " channel(s) of OpenCV depth " +
                   std::to_string(raw.depth()));
   }
