@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/render/context.hpp>
@@ -60,7 +61,9 @@ class GeneratorCli : public ::testing::Test {
   static void SetUpTestSuite() {
     std::string why;
     if (!render::egl_available(&why)) return;
-    root_ = new fs::path(fs::temp_directory_path() / "clutterscope_generator_cli_test");
+    // ctest runs each test in its own process, possibly in parallel: one folder per process.
+    root_ = new fs::path(fs::temp_directory_path() /
+                         ("clutterscope_generator_cli_test_" + std::to_string(::getpid())));
     fs::remove_all(*root_);
     generate_output_ = new CommandRun(run(generate_arguments(*root_ / "a")));
   }
