@@ -1,0 +1,80 @@
+%matplotlib inline
+import json
+import math
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+from IPython.display import display
+
+report_dir = Path(REPORT_DIR)
+VARIANCE_COLUMNS = ["var_x_cm2", "var_y_cm2", "var_z_cm2"]
+NUMERIC_COLUMNS = ["px_count_all", "px_count_valid", "px_count_visib", "visib_fract",
+                   *VARIANCE_COLUMNS, "err_cm"]
+
+
+def fmt(value, spec=".3g"):
+    """A number for the text, or "undefined" for None / NaN / inf."""
+    if value is None or not math.isfinite(float(value)):
+        return "undefined"
+    return format(value, spec)
+
+
+def as_bool(column):
+    """CSV booleans (1/0, true/false, empty) as True / False / NaN."""
+    words = {"1": True, "1.0": True, "true": True, "0": False, "0.0": False, "false": False}
+    return column.map(lambda v: words.get(str(v).strip().lower(), np.nan) if pd.notna(v) else np.nan)
+
+
+objects_path = report_dir / "objects.csv"
+if not objects_path.exists():
+    raise FileNotFoundError(
+        f"{objects_path} not found: run `clutterscope report DATASET --out {report_dir}` first")
+objects = pd.read_csv(objects_path)
+for column in NUMERIC_COLUMNS:
+    if column in objects.columns:
+        objects[column] = pd.to_numeric(objects[column], errors="coerce").replace(
+            [np.inf, -np.inf], np.nan)
+if "label" in objects.columns:
+    objects["label"] = objects["label"].fillna("").astype(str)
+
+has_estimates = all(column in objects.columns for column in VARIANCE_COLUMNS)
+# The threshold applies to the largest axis variance: "largest <= T" means "every axis <= T".
+# An object with any axis missing has no usable estimate (NaN).
+objects["max_var_cm2"] = (objects[VARIANCE_COLUMNS].max(axis=1, skipna=False)
+                          if has_estimates else np.nan)
+if "err_cm" not in objects.columns:
+    objects["err_cm"] = np.nan
+objects["estimated"] = objects["max_var_cm2"].notna()
+
+images_path = report_dir / "images.csv"
+if images_path.exists():
+    images = pd.read_csv(images_path)
+    images["scene_visibility"] = pd.to_numeric(images["scene_visibility"], errors="coerce")
+else:
+    # Eq. 10 per image from the object rows: V^s = sum v_i / sum K_i.
+    keys = ["split", "scene_id", "im_id"]
+    grouped = objects.groupby(keys, sort=True)
+    images = grouped[["px_count_visib", "px_count_valid"]].sum().reset_index()
+    images["n_objects"] = grouped.size().values
+    images["scene_visibility"] = (images["px_count_visib"]
+                                  / images["px_count_valid"].where(images["px_count_valid"] > 0))
+    images = images[keys + ["n_objects", "scene_visibility"]]
+    print("images.csv not found: scene visibility computed from objects.csv")
+
+summary_path = report_dir / "summary.json"
+summary = json.loads(summary_path.read_text()) if summary_path.exists() else {}
+if not isinstance(summary, dict):
+    summary = {}
+
+print(f"{len(objects)} objects in {len(images)} images; {int(objects['estimated'].sum())} with an "
+      f"estimate, {int((objects['estimated'] & objects['err_cm'].notna()).sum())} of them with a "
+      f"measured error")
+if not has_estimates:
+    print("objects.csv has no estimate columns (a visibility-only folder): run "
+          "`clutterscope report DATASET --out DIR` for the variance and threshold sections")
+options = summary.get("options")
+if isinstance(options, dict) and options:
+    display(pd.DataFrame({"value": [v if v is not None else "undefined" for v in options.values()]},
+                         index=list(options.keys())))

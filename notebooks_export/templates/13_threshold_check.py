@@ -1,0 +1,33 @@
+chosen = threshold_check(VARIANCE_THRESHOLD_CM2)
+estimated = objects[objects["estimated"]]
+confident_now = estimated["max_var_cm2"] <= VARIANCE_THRESHOLD_CM2
+below = objects["visib_fract"] < VISIBILITY_CUTOFF
+check = pd.DataFrame({"value": [
+    f"{VARIANCE_THRESHOLD_CM2:g}", f"{VISIBILITY_CUTOFF:g}", f"{ACCURATE_CM:g}",
+    len(objects), len(estimated), int(confident_now.sum()), chosen["confident"],
+    chosen["confident"] - chosen["confident_and_accurate"],
+    fmt(chosen["precision"]), fmt(chosen["recall"]), fmt(chosen["f1"]),
+    int(below.sum()), chosen["accepted_below_cutoff"]]},
+    index=["variance threshold (cm²)", "visibility cutoff", "accurate within (cm)", "objects",
+           "objects with an estimate", "confident (acted on)", "confident with a measured error",
+           "confident but off by more than ACCURATE_CM", "precision", "recall", "F1",
+           "objects below the visibility cutoff", "confident below the visibility cutoff"])
+display(check)
+print(f"threshold check: precision {fmt(chosen['precision'])}, recall {fmt(chosen['recall'])}, "
+      f"F1 {fmt(chosen['f1'])}, confident {int(confident_now.sum())}, "
+      f"accepted below cutoff {chosen['accepted_below_cutoff']}")
+
+cutoffs = np.round(np.linspace(0.1, 1.0, 10), 2)
+converse = pd.DataFrame({
+    "visibility below": [f"{c:.0%}" for c in cutoffs],
+    "objects": [int((objects["visib_fract"] < c).sum()) for c in cutoffs],
+    "with an estimate": [int((estimated["visib_fract"] < c).sum()) for c in cutoffs],
+    "accepted": [int(((estimated["visib_fract"] < c) & confident_now).sum()) for c in cutoffs]})
+display(converse)
+
+if "confident" in estimated.columns:
+    written = as_bool(estimated["confident"])
+    known = written.notna()
+    agree = int((written[known] == confident_now[known]).sum())
+    print(f"the estimator's confident column agrees with VARIANCE_THRESHOLD_CM2 for {agree} of "
+          f"{int(known.sum())} estimates")
