@@ -131,8 +131,9 @@ std::string* ReportCli::first_run_json_ = nullptr;
 
 TEST_F(ReportCli, WritesTheReportFolderAndPrintsTheSummary) {
   const fs::path dir = report_dir();
-  for (const char* file : {"objects.csv", "images.csv", "summary.json", "report.html",
-                           "visibility/objects.csv", "estimate/estimates.csv"}) {
+  for (const char* file :
+       {"objects.csv", "images.csv", "summary.json", "report.html", "clutter_report.ipynb",
+        "visibility/objects.csv", "estimate/estimates.csv"}) {
     EXPECT_TRUE(fs::is_regular_file(dir / file)) << file;
   }
   std::size_t plots = 0;
@@ -281,9 +282,10 @@ TEST_F(ReportCli, BadOptionsAreRefusedBeforeAnyWork) {
   const fs::path out = *root_ / "bad_options";
   fs::remove_all(out);
   ASSERT_EQ(run(report_arguments(dataset(), out, " --particles 1 --images 0")).exit_code, 2);
-  const CommandRun corrected = run(report_arguments(dataset(), out, " --scenes 1"));
+  const CommandRun corrected = run(report_arguments(dataset(), out, " --scenes 1 --no-notebook"));
   EXPECT_EQ(corrected.exit_code, 0) << corrected.errors;
   EXPECT_TRUE(fs::exists(out / "report.html"));
+  EXPECT_FALSE(fs::exists(out / "clutter_report.ipynb"));
 }
 
 TEST_F(ReportCli, ThresholdsPrintsTheCheckFromAReportFolder) {

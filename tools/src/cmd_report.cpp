@@ -56,10 +56,12 @@ struct ReportCommandState {
   ReportArguments arguments;
   std::map<std::string, std::string> values;  // forwarded value options as typed
   std::map<std::string, bool> flags;
+  bool no_notebook = false;
 };
 
 void run_report_command(CLI::App& command, ReportCommandState& state, int* exit_code) {
   ReportArguments arguments = state.arguments;
+  arguments.notebook = !state.no_notebook;
   for (const StepOption& option : step_options()) {
     if (command.get_option(option.name)->count() == 0) continue;
     ForwardedOptions& forwarded =
@@ -81,7 +83,7 @@ void add_report_command(CLI::App& app, int* exit_code) {
       "report",
       "The clutter report of a dataset: runs visibility and estimation into DIR/visibility and "
       "DIR/estimate (finished images are reused, so an interrupted report resumes), then writes "
-      "objects.csv, images.csv, summary.json, report.html and plots/ "
+      "objects.csv, images.csv, summary.json, report.html, plots/ and clutter_report.ipynb "
       "into DIR and prints the path of report.html and a five-line summary. A folder holding a "
       "report of another dataset or other options is refused.");
   add_dataset_options(*command, &arguments.dataset);
@@ -102,6 +104,8 @@ void add_report_command(CLI::App& app, int* exit_code) {
       ->add_option("--seed", analysis.seed,
                    "random seed of the estimator and of the bootstrap intervals")
       ->capture_default_str();
+  command->add_flag("--no-notebook", state->no_notebook,
+                    "do not write the Jupyter notebook clutter_report.ipynb");
   for (const StepOption& option : step_options()) {
     if (option.flag) {
       command->add_flag(option.name, state->flags[option.name], option.help);

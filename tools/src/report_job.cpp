@@ -5,6 +5,7 @@
 #include <chrono>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/notebooks_export/notebook.hpp>
 #include <clutterscope/tools/batch.hpp>
 #include <clutterscope/tools/report/report.hpp>
 #include <clutterscope/tools/report/tables.hpp>
@@ -135,6 +136,21 @@ nlohmann::ordered_json run_record(const ReportArguments& arguments, const fs::pa
   return run;
 }
 
+void write_notebook(const fs::path& dir, const report::ReportOptions& analysis) {
+  notebooks_export::NotebookOptions options;
+  options.variance_threshold_cm2 = analysis.variance_threshold_cm2;
+  options.visibility_cutoff = analysis.visibility_cutoff;
+  options.accurate_cm = analysis.accurate_cm;
+  try {
+    notebooks_export::write_clutter_notebook(dir, options);
+  } catch (const notebooks_export::NotebookError& error) {
+    if (error.kind() == notebooks_export::NotebookError::Kind::kMissingReport) {
+      throw datasets::DatasetError(error.file(), error.message());
+    }
+    throw;
+  }
+}
+
 // DIR/run.json: what this run did (times differ between runs, so they are kept here).
 void write_run_json(const fs::path& dir, const std::vector<StepRun>& steps, double seconds) {
   nlohmann::ordered_json run;
@@ -256,6 +272,7 @@ ReportRun run_report(const ReportArguments& arguments) {
       objects, report::read_images_csv(visibility_dir / "images.csv"), arguments.analysis);
   const std::vector<report::NamedPlot> plots = report::standard_plots(objects, analysis);
   run.files = report::write_report(dir, objects, analysis, plots, run_record(arguments, dir));
+  if (arguments.notebook) write_notebook(dir, arguments.analysis);
   run.console_summary = report::format_console_summary(analysis);
   write_run_json(dir, run.steps,
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());

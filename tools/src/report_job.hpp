@@ -31,6 +31,7 @@ struct ReportArguments {
   ForwardedOptions visibility;
   ForwardedOptions estimate;
   report::ReportOptions analysis;  // threshold and seed are also forwarded to estimate
+  bool notebook = true;
 };
 
 // What one step did in this run (from its run.json).
