@@ -85,7 +85,9 @@ class EstimateWorker {
       row.add(object.label);
       if (ok) {
         for (int a = 0; a < 3; ++a) row.add(1e3 * object.position[a], 3);
-        for (int a = 0; a < 3; ++a) row.add(1e4 * object.variance[a], 6);
+        // Significant digits, not fixed decimals: a variance of 1e-7 cm^2 must not read as 0,
+        // whose log the report cannot take.
+        for (int a = 0; a < 3; ++a) row.add(format_general(1e4 * object.variance[a], 6));
         row.add(object.confident ? "1" : "0");
         row.add(100 * *object.error_m, 4).add(100 * *object.initial_error_m, 4);
         row.add(object.effective_sample_size, 2);
