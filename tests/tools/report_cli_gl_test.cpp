@@ -83,7 +83,9 @@ class ReportCli : public ::testing::Test {
   static void SetUpTestSuite() {
     std::string why;
     if (!render::egl_available(&why)) return;
-    root_ = new fs::path(fs::temp_directory_path() / "clutterscope_report_cli_test");
+    // ctest runs each test in its own process, possibly in parallel: one folder per process.
+    root_ = new fs::path(fs::temp_directory_path() /
+                         ("clutterscope_report_cli_test_" + std::to_string(::getpid())));
     fs::remove_all(*root_);
     generate_ = new CommandRun(run("generate --out \"" + dataset().string() +
                                    "\" --scenes 2 --objects 4:4 --views 1 --seed 5 --width 160 "

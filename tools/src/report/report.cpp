@@ -366,10 +366,13 @@ std::string format_console_summary(const ReportAnalysis& analysis) {
   out << "variance ~ visibility: Spearman " << statistic_text(rho.estimate, 3) << ", "
       << fixed(100.0 * options.bootstrap.confidence, 0) << "% interval " << interval_text(rho)
       << " (n = " << rho.n << ")\n";
+  // The undefined reason already says which precision no threshold reached.
   out << "recommended threshold: "
-      << (recommended.defined() ? general(*recommended.value) + " cm^2"
-                                : "n/a (" + recommended.undefined_reason + ")")
-      << " (largest with precision >= " << general(options.min_precision) << ")\n";
+      << (recommended.defined()
+              ? general(*recommended.value) +
+                    " cm^2 (largest with precision >= " + general(options.min_precision) + ")"
+              : "n/a (" + recommended.undefined_reason + ")")
+      << "\n";
   out << "accepted below " << fixed(100.0 * options.visibility_cutoff, 0)
       << "%:    " << chosen.accepted_below_cutoff << " of " << chosen.accepted << " accepted at "
       << general(options.variance_threshold_cm2) << " cm^2 ("
