@@ -121,6 +121,16 @@ std::vector<std::string> command_names() {
   return names;
 }
 
+CLI::App& bench_command_group(CLI::App& app) {
+  for (CLI::App* command : app.get_subcommands({})) {
+    if (command->get_name() == "bench") return *command;
+  }
+  CLI::App* bench =
+      app.add_subcommand("bench", "Benchmarks that print timings measured in one run");
+  bench->require_subcommand(1);
+  return *bench;
+}
+
 int run_cli(int argc, char** argv) {
   CLI::App app;
   describe_app(app);

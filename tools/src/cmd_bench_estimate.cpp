@@ -183,14 +183,7 @@ void run_bench(const BenchEstimateArguments& arguments) {
 }  // namespace
 
 void add_bench_estimate_command(CLI::App& app, int* exit_code) {
-  CLI::App* bench = nullptr;
-  for (CLI::App* command : app.get_subcommands({})) {
-    if (command->get_name() == "bench") bench = command;
-  }
-  if (bench == nullptr) {
-    bench = app.add_subcommand("bench", "Benchmarks that print timings measured in one run");
-    bench->require_subcommand(1);
-  }
+  CLI::App* bench = &bench_command_group(app);
   auto arguments = std::make_shared<BenchEstimateArguments>();
   CLI::App* command = bench->add_subcommand(
       "estimate",

@@ -8,6 +8,9 @@
 
 namespace clutterscope::tools {
 
+// The `bench` command group, created by whichever benchmark registers first.
+CLI::App& bench_command_group(CLI::App& app);
+
 void add_render_command(CLI::App& app, int* exit_code);
 void add_merge_command(CLI::App& app, int* exit_code);
 void add_visibility_command(CLI::App& app, int* exit_code);
