@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <functional>
 
+#include "cli_run.hpp"
 #include "datasets/bop_fixture_support.hpp"
 
 namespace clutterscope::datasets {
@@ -20,25 +21,11 @@ using testing::ScratchDir;
 using testing::write_text;
 using testing::write_tiny_bop_dataset;
 
-struct CommandRun {
-  int exit_code = -1;
-  bool signalled = false;
-  std::string output;
-};
+using clutterscope::testing::CommandRun;
 
 CommandRun run(const std::string& arguments) {
-  const std::string command = std::string("\"") + CLUTTERSCOPE_BINARY + "\" " + arguments + " 2>&1";
-  CommandRun result;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return result;
-  char buffer[4096];
-  size_t read = 0;
-  while ((read = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0)
-    result.output.append(buffer, read);
-  const int status = ::pclose(pipe);
-  result.signalled = WIFSIGNALED(status);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
+  return clutterscope::testing::run_clutterscope(arguments,
+                                                 clutterscope::testing::Stderr::kMergedIntoOutput);
 }
 
 void replace_first(const fs::path& path, const std::string& from, const std::string& to) {

@@ -17,28 +17,18 @@
 #include <sstream>
 #include <string>
 
+#include "cli_run.hpp"
+
 namespace clutterscope::datasets {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CommandRun {
-  int exit_code = -1;
-  std::string output;
-};
+using clutterscope::testing::CommandRun;
 
 CommandRun run(const std::string& arguments) {
-  const std::string command = std::string("\"") + CLUTTERSCOPE_BINARY + "\" " + arguments + " 2>&1";
-  CommandRun result;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return result;
-  char buffer[4096];
-  std::size_t read = 0;
-  while ((read = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0)
-    result.output.append(buffer, read);
-  const int status = ::pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
+  return clutterscope::testing::run_clutterscope(arguments,
+                                                 clutterscope::testing::Stderr::kMergedIntoOutput);
 }
 
 std::string read_text(const fs::path& path) {

@@ -13,6 +13,8 @@
 #include <set>
 #include <string>
 
+#include "cli_run.hpp"
+
 namespace clutterscope::render {
 namespace {
 
@@ -112,27 +114,17 @@ TEST_F(TinyDataset, SceneInstancesNamesSceneImageAndGtOfABadModel) {
   }
 }
 
-struct CommandResult {
-  int exit_code = -1;
-  std::string output;
-};
+using clutterscope::testing::CommandRun;
 
-CommandResult run(const std::string& arguments) {
-  CommandResult result;
-  const std::string command = std::string(CLUTTERSCOPE_BINARY) + " " + arguments + " 2>&1";
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return result;
-  char buffer[4096];
-  while (std::fgets(buffer, sizeof(buffer), pipe) != nullptr) result.output += buffer;
-  const int status = ::pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
+CommandRun run(const std::string& arguments) {
+  return clutterscope::testing::run_clutterscope(arguments,
+                                                 clutterscope::testing::Stderr::kMergedIntoOutput);
 }
 
 TEST_F(TinyDataset, RenderCommandWritesBopDepthLabelsAndPreview) {
   if (!fs::exists(CLUTTERSCOPE_BINARY)) GTEST_SKIP() << "build the clutterscope target first";
   const fs::path out = root_ / "out";
-  const CommandResult result =
+  const CommandRun result =
       run("render " + root_.string() + " --scene 1 --image 0 --out " + out.string());
   ASSERT_EQ(result.exit_code, 0) << result.output;
   EXPECT_NE(result.output.find("GL renderer: "), std::string::npos) << result.output;
@@ -157,16 +149,16 @@ TEST_F(TinyDataset, RenderCommandWritesBopDepthLabelsAndPreview) {
 TEST_F(TinyDataset, RenderCommandExitCodes) {
   if (!fs::exists(CLUTTERSCOPE_BINARY)) GTEST_SKIP() << "build the clutterscope target first";
   const std::string out = (root_ / "out").string();
-  const CommandResult unknown_scene =
+  const CommandRun unknown_scene =
       run("render " + root_.string() + " --scene 7 --image 0 --out " + out);
   EXPECT_EQ(unknown_scene.exit_code, 3) << unknown_scene.output;
   EXPECT_NE(unknown_scene.output.find("7"), std::string::npos);
-  const CommandResult missing_scene = run("render " + root_.string() + " --image 0 --out " + out);
+  const CommandRun missing_scene = run("render " + root_.string() + " --image 0 --out " + out);
   EXPECT_EQ(missing_scene.exit_code, 2) << missing_scene.output;
-  const CommandResult bad_center =
+  const CommandRun bad_center =
       run("render " + root_.string() + " --scene 1 --image 0 --pixel-center quarter --out " + out);
   EXPECT_EQ(bad_center.exit_code, 2) << bad_center.output;
-  const CommandResult help = run("render --help");
+  const CommandRun help = run("render --help");
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_NE(help.output.find("--pixel-center"), std::string::npos);
 }

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "cli_run.hpp"
 #include "tools/fake_batch_support.hpp"
 
 namespace clutterscope::tools {
@@ -24,14 +25,10 @@ namespace {
 namespace fs = std::filesystem;
 
 int run_quiet(const std::string& arguments, std::string* output) {
-  const std::string command = std::string(CLUTTERSCOPE_BINARY) + " " + arguments + " 2>&1";
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return -1;
-  char buffer[4096];
-  std::size_t read = 0;
-  while ((read = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) output->append(buffer, read);
-  const int status = ::pclose(pipe);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const clutterscope::testing::CommandRun run = clutterscope::testing::run_clutterscope(
+      arguments, clutterscope::testing::Stderr::kMergedIntoOutput);
+  *output += run.output;
+  return run.exit_code;
 }
 
 // Runs the estimator with the default options and checks the criteria. The variance criterion

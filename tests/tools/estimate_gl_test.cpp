@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_run.hpp"
 #include "tools/fake_batch_support.hpp"
 
 namespace clutterscope::tools {
@@ -30,23 +31,11 @@ namespace fs = std::filesystem;
 using testing::fresh_dir;
 using testing::read_file;
 
-struct CommandRun {
-  int exit_code = -1;
-  std::string output;
-};
+using clutterscope::testing::CommandRun;
 
 CommandRun run(const std::string& arguments) {
-  const std::string command = std::string(CLUTTERSCOPE_BINARY) + " " + arguments + " 2>&1";
-  CommandRun result;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return result;
-  char buffer[4096];
-  std::size_t read = 0;
-  while ((read = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0)
-    result.output.append(buffer, read);
-  const int status = ::pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
+  return clutterscope::testing::run_clutterscope(arguments,
+                                                 clutterscope::testing::Stderr::kMergedIntoOutput);
 }
 
 // Two scenes of 5 objects in a tray, 320 x 240, generated once for the whole suite.

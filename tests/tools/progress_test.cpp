@@ -53,6 +53,20 @@ TEST(Progress, BarShowsCountRateAndEtaAndIsThrottled) {
       << output;
 }
 
+TEST(Progress, NamesItsUnit) {
+  ::testing::internal::CaptureStderr();
+  {
+    Progress progress("generate", 2, 0, Progress::Style::kSummaryOnly, "scenes");
+    for (int i = 0; i < 2; ++i) progress.item_done();
+    progress.finish(0);
+  }
+  const std::string output = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(output.rfind("generate: 2/2 scenes (2 computed, 0 resumed, 0 failed) in ", 0), 0u)
+      << output;
+  EXPECT_NE(output.find(" scenes/s\n"), std::string::npos) << output;
+  EXPECT_EQ(output.find("images"), std::string::npos) << output;
+}
+
 TEST(Progress, QuietPrintsNothing) {
   ::testing::internal::CaptureStderr();
   {

@@ -16,16 +16,14 @@
 #include <string>
 #include <vector>
 
+#include "cli_run.hpp"
+
 namespace clutterscope::tools {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CommandRun {
-  int exit_code = -1;
-  std::string output;  // stdout
-  std::string errors;  // stderr
-};
+using clutterscope::testing::CommandRun;
 
 std::string read_text(const fs::path& path) {
   std::ifstream stream(path, std::ios::binary);
@@ -37,22 +35,7 @@ std::string read_text(const fs::path& path) {
 nlohmann::json read_json(const fs::path& path) { return nlohmann::json::parse(read_text(path)); }
 
 CommandRun run(const std::string& arguments) {
-  const fs::path errors_file =
-      fs::temp_directory_path() / ("clutterscope_report_cli_stderr_" + std::to_string(::getpid()));
-  const std::string command = std::string("\"") + CLUTTERSCOPE_BINARY + "\" " + arguments +
-                              " 2>\"" + errors_file.string() + "\"";
-  CommandRun result;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return result;
-  char buffer[4096];
-  std::size_t read = 0;
-  while ((read = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0)
-    result.output.append(buffer, read);
-  const int status = ::pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  result.errors = read_text(errors_file);
-  fs::remove(errors_file);
-  return result;
+  return clutterscope::testing::run_clutterscope(arguments);
 }
 
 std::vector<std::string> lines_of(const std::string& text) {

@@ -10,19 +10,14 @@
 #include <set>
 #include <string>
 
+#include "cli_run.hpp"
+
 namespace clutterscope::tools {
 namespace {
 
 // The long option names listed by `clutterscope COMMAND --help`.
 std::set<std::string> options_of(const std::string& command) {
-  const std::string line = std::string("\"") + CLUTTERSCOPE_BINARY + "\" " + command + " --help";
-  std::string help;
-  FILE* pipe = ::popen(line.c_str(), "r");
-  if (pipe == nullptr) return {};
-  char buffer[4096];
-  std::size_t read = 0;
-  while ((read = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) help.append(buffer, read);
-  ::pclose(pipe);
+  const std::string help = clutterscope::testing::run_clutterscope(command + " --help").output;
   std::set<std::string> names;
   const std::regex option(R"((^|[ ,])(--[a-z0-9][a-z0-9-]*))");
   for (std::sregex_iterator it(help.begin(), help.end(), option), end; it != end; ++it) {

@@ -13,6 +13,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
+#include "cli_run.hpp"
 #include "datasets/bop_fixture_support.hpp"
 
 namespace clutterscope::visibility {
@@ -25,24 +26,9 @@ using clutterscope::testing::TinyBopOptions;
 using clutterscope::testing::write_text;
 using clutterscope::testing::write_tiny_bop_dataset;
 
-struct RunResult {
-  int exit_code = -1;
-  std::string out, err;
-};
-
-RunResult run_cli(const std::string& arguments, const fs::path& scratch) {
-  const fs::path out = scratch / "stdout.txt", err = scratch / "stderr.txt";
-  const std::string command = std::string("\"") + CLUTTERSCOPE_BINARY + "\" " + arguments +
-                              " > \"" + out.string() + "\" 2> \"" + err.string() + "\"";
-  const int status = std::system(command.c_str());
-  RunResult result;
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  result.out = read_text(out);
-  result.err = read_text(err);
-  return result;
-}
-
-std::string quoted(const fs::path& path) { return "\"" + path.string() + "\""; }
+using clutterscope::testing::CommandRun;
+using clutterscope::testing::quoted;
+using clutterscope::testing::run_clutterscope;
 
 // Every file under `dir` except the batch bookkeeping (.batch/, run.json), relative path ->
 // bytes.
@@ -101,10 +87,9 @@ class VisibilityCli : public ::testing::Test {
 TEST_F(VisibilityCli, RenderedModeWritesEveryOutput) {
   const fs::path data = dataset();
   const fs::path out = scratch_.path() / "out";
-  const RunResult run = run_cli("visibility " + quoted(data) + " --out " + quoted(out) +
-                                    " --jobs 1 --write-bop-info --masks --overlays -q",
-                                scratch_.path());
-  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const CommandRun run = run_clutterscope("visibility " + quoted(data) + " --out " + quoted(out) +
+                                          " --jobs 1 --write-bop-info --masks --overlays -q");
+  ASSERT_EQ(run.exit_code, 0) << run.errors;
   const auto objects = csv_rows(read_text(out / "objects.csv"));
   ASSERT_EQ(objects.size(), 1u + 2 * 3);  // header + 2 images x 3 instances
   EXPECT_EQ(objects[0].size(), 18u);
@@ -160,10 +145,9 @@ TEST_F(VisibilityCli, BopModeOnAWallInFrontOfTheObjects) {
   // in-image silhouette (every pixel but (0, 0) has a measurement).
   const fs::path data = dataset();
   const fs::path out = scratch_.path() / "out";
-  const RunResult run = run_cli(
-      "visibility " + quoted(data) + " --out " + quoted(out) + " --mode bop19 --write-bop-info -q",
-      scratch_.path());
-  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const CommandRun run = run_clutterscope("visibility " + quoted(data) + " --out " + quoted(out) +
+                                          " --mode bop19 --write-bop-info -q");
+  ASSERT_EQ(run.exit_code, 0) << run.errors;
   const nlohmann::json info =
       nlohmann::json::parse(read_text(out / "bop/test/000001/scene_gt_info.json"));
   for (const auto& instance : info["1"]) {
@@ -182,17 +166,17 @@ TEST_F(VisibilityCli, JobsShardsAndMergeGiveIdenticalBytes) {
   const fs::path data = dataset(options);
   const std::string common = "visibility " + quoted(data) + " --write-bop-info --masks -q";
   const fs::path one = scratch_.path() / "one", two = scratch_.path() / "two";
-  ASSERT_EQ(run_cli(common + " --jobs 1 --out " + quoted(one), scratch_.path()).exit_code, 0);
-  ASSERT_EQ(run_cli(common + " --jobs 2 --out " + quoted(two), scratch_.path()).exit_code, 0);
+  ASSERT_EQ(run_clutterscope(common + " --jobs 1 --out " + quoted(one)).exit_code, 0);
+  ASSERT_EQ(run_clutterscope(common + " --jobs 2 --out " + quoted(two)).exit_code, 0);
   expect_same_files(one, two);
 
   const fs::path a = scratch_.path() / "a", b = scratch_.path() / "b", c = scratch_.path() / "c";
-  ASSERT_EQ(run_cli(common + " --shard 0/2 --out " + quoted(a), scratch_.path()).exit_code, 0);
-  ASSERT_EQ(run_cli(common + " --shard 1/2 --out " + quoted(b), scratch_.path()).exit_code, 0);
+  ASSERT_EQ(run_clutterscope(common + " --shard 0/2 --out " + quoted(a)).exit_code, 0);
+  ASSERT_EQ(run_clutterscope(common + " --shard 1/2 --out " + quoted(b)).exit_code, 0);
   EXPECT_FALSE(fs::exists(a / "objects.csv"));  // a shard writes no final tables
-  const RunResult merge = run_cli(
-      "merge " + quoted(a) + " " + quoted(b) + " --out " + quoted(c) + " -q", scratch_.path());
-  ASSERT_EQ(merge.exit_code, 0) << merge.err;
+  const CommandRun merge =
+      run_clutterscope("merge " + quoted(a) + " " + quoted(b) + " --out " + quoted(c) + " -q");
+  ASSERT_EQ(merge.exit_code, 0) << merge.errors;
   expect_same_files(one, c);
 }
 
@@ -204,7 +188,7 @@ TEST_F(VisibilityCli, ResumeAfterKillNineGivesIdenticalBytes) {
   const fs::path reference = scratch_.path() / "reference", killed = scratch_.path() / "killed";
   const std::string common =
       "visibility " + quoted(data) + " --write-bop-info --masks --overlays -q --jobs 1";
-  ASSERT_EQ(run_cli(common + " --out " + quoted(reference), scratch_.path()).exit_code, 0);
+  ASSERT_EQ(run_clutterscope(common + " --out " + quoted(reference)).exit_code, 0);
 
   const pid_t child = fork();
   ASSERT_GE(child, 0);
@@ -235,8 +219,8 @@ TEST_F(VisibilityCli, ResumeAfterKillNineGivesIdenticalBytes) {
   waitpid(child, &status, 0);
   ASSERT_TRUE(WIFSIGNALED(status)) << "the run ended before it could be killed";
   EXPECT_FALSE(fs::exists(killed / "summary.json"));
-  const RunResult resumed = run_cli(common + " --out " + quoted(killed), scratch_.path());
-  ASSERT_EQ(resumed.exit_code, 0) << resumed.err;
+  const CommandRun resumed = run_clutterscope(common + " --out " + quoted(killed));
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.errors;
   expect_same_files(reference, killed);
 }
 
@@ -245,24 +229,23 @@ TEST_F(VisibilityCli, MissingDepthInBopMode) {
   options.write_depth = false;
   options.write_camera_json = true;  // the image size then comes from camera.json
   const fs::path data = dataset(options);
-  const RunResult run = run_cli("visibility " + quoted(data) + " --mode bop19 -q --jobs 1 --out " +
-                                    quoted(scratch_.path() / "out"),
-                                scratch_.path());
+  const CommandRun run =
+      run_clutterscope("visibility " + quoted(data) + " --mode bop19 -q --jobs 1 --out " +
+                       quoted(scratch_.path() / "out"));
   EXPECT_EQ(run.exit_code, 3);
-  EXPECT_NE(run.err.find("depth"), std::string::npos) << run.err;
-  EXPECT_NE(run.err.find("000001/depth/000000.png"), std::string::npos) << run.err;
-  EXPECT_NE(run.err.find("scene 1, image 0"), std::string::npos) << run.err;
+  EXPECT_NE(run.errors.find("depth"), std::string::npos) << run.errors;
+  EXPECT_NE(run.errors.find("000001/depth/000000.png"), std::string::npos) << run.errors;
+  EXPECT_NE(run.errors.find("scene 1, image 0"), std::string::npos) << run.errors;
   // Rendered mode does not need the measured depth.
-  EXPECT_EQ(run_cli("visibility " + quoted(data) + " -q --out " + quoted(scratch_.path() / "r"),
-                    scratch_.path())
-                .exit_code,
-            0);
+  EXPECT_EQ(
+      run_clutterscope("visibility " + quoted(data) + " -q --out " + quoted(scratch_.path() / "r"))
+          .exit_code,
+      0);
   // --keep-going records both images and exits 1.
   const fs::path kept = scratch_.path() / "kept";
-  const RunResult keep =
-      run_cli("visibility " + quoted(data) + " --mode bop19 -q --keep-going --out " + quoted(kept),
-              scratch_.path());
-  EXPECT_EQ(keep.exit_code, 1) << keep.err;
+  const CommandRun keep = run_clutterscope("visibility " + quoted(data) +
+                                           " --mode bop19 -q --keep-going --out " + quoted(kept));
+  EXPECT_EQ(keep.exit_code, 1) << keep.errors;
   const nlohmann::json summary = nlohmann::json::parse(read_text(kept / "summary.json"));
   EXPECT_EQ(summary["counts"]["failed"], 2);
   EXPECT_NE(summary["counts"]["failures"][0]["error"].get<std::string>().find("depth"),
@@ -273,22 +256,20 @@ TEST_F(VisibilityCli, DepthOfTheWrongSize) {
   const fs::path data = dataset();
   cv::imwrite((data / "test/000001/depth/000001.png").string(),
               cv::Mat(10, 12, CV_16U, cv::Scalar(7000)));
-  const RunResult run = run_cli(
-      "visibility " + quoted(data) + " --mode bop18 -q --out " + quoted(scratch_.path() / "out"),
-      scratch_.path());
+  const CommandRun run = run_clutterscope("visibility " + quoted(data) + " --mode bop18 -q --out " +
+                                          quoted(scratch_.path() / "out"));
   EXPECT_EQ(run.exit_code, 3);
-  EXPECT_NE(run.err.find("12x10"), std::string::npos) << run.err;
-  EXPECT_NE(run.err.find("image 1"), std::string::npos) << run.err;
+  EXPECT_NE(run.errors.find("12x10"), std::string::npos) << run.errors;
+  EXPECT_NE(run.errors.find("image 1"), std::string::npos) << run.errors;
 }
 
 TEST_F(VisibilityCli, UnreadableModel) {
   const fs::path data = dataset();
   write_text(data / "models/obj_000002.ply", "ply\nthis is not a mesh\n");
-  const RunResult run =
-      run_cli("visibility " + quoted(data) + " -q --out " + quoted(scratch_.path() / "out"),
-              scratch_.path());
-  EXPECT_EQ(run.exit_code, 3) << run.err;
-  EXPECT_NE(run.err.find("obj_000002.ply"), std::string::npos) << run.err;
+  const CommandRun run = run_clutterscope("visibility " + quoted(data) + " -q --out " +
+                                          quoted(scratch_.path() / "out"));
+  EXPECT_EQ(run.exit_code, 3) << run.errors;
+  EXPECT_NE(run.errors.find("obj_000002.ply"), std::string::npos) << run.errors;
 }
 
 TEST_F(VisibilityCli, ImageWithZeroObjectsAndObjectBehindTheCamera) {
@@ -300,9 +281,9 @@ TEST_F(VisibilityCli, ImageWithZeroObjectsAndObjectBehindTheCamera) {
   gt["1"] = nlohmann::json::array();
   write_text(gt_path, gt.dump());
   const fs::path out = scratch_.path() / "out";
-  const RunResult run = run_cli(
-      "visibility " + quoted(data) + " -q --write-bop-info --out " + quoted(out), scratch_.path());
-  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const CommandRun run =
+      run_clutterscope("visibility " + quoted(data) + " -q --write-bop-info --out " + quoted(out));
+  ASSERT_EQ(run.exit_code, 0) << run.errors;
   const auto images = csv_rows(read_text(out / "images.csv"));
   ASSERT_EQ(images.size(), 3u);
   EXPECT_EQ(images[2], (std::vector<std::string>{"test", "1", "1", "0", ""}));
@@ -312,13 +293,12 @@ TEST_F(VisibilityCli, ImageWithZeroObjectsAndObjectBehindTheCamera) {
   gt["1"] = gt["0"];
   gt["1"][2]["cam_t_m2c"] = {0.0, 0.0, -500.0};
   write_text(gt_path, gt.dump());
-  const RunResult behind =
-      run_cli("visibility " + quoted(data) + " -q --out " + quoted(scratch_.path() / "behind"),
-              scratch_.path());
+  const CommandRun behind = run_clutterscope("visibility " + quoted(data) + " -q --out " +
+                                             quoted(scratch_.path() / "behind"));
   EXPECT_EQ(behind.exit_code, 3);
-  EXPECT_NE(behind.err.find("behind the camera"), std::string::npos) << behind.err;
-  EXPECT_NE(behind.err.find("image 1"), std::string::npos) << behind.err;
-  EXPECT_NE(behind.err.find("gt 2"), std::string::npos) << behind.err;
+  EXPECT_NE(behind.errors.find("behind the camera"), std::string::npos) << behind.errors;
+  EXPECT_NE(behind.errors.find("image 1"), std::string::npos) << behind.errors;
+  EXPECT_NE(behind.errors.find("gt 2"), std::string::npos) << behind.errors;
 }
 
 }  // namespace

@@ -109,7 +109,7 @@ GenerateSummary generate_dataset(const GenerateOptions& options) {
   const render::Intrinsics intrinsics = render::Intrinsics::from_camera(camera);
   datasets::DetectionsWriter detections(options.out / "detections_test.json");
   Progress progress("generate", static_cast<std::size_t>(options.scenes), 0,
-                    options.quiet ? Progress::Style::kQuiet : Progress::Style::kAuto);
+                    options.quiet ? Progress::Style::kQuiet : Progress::Style::kAuto, "scenes");
   GenerateSummary summary;
   for (int scene_id = 0; scene_id < options.scenes; ++scene_id) {
     std::mt19937_64 layout_rng = datasets::derive_rng(options.seed, scene_id, kLayoutTask);

@@ -13,8 +13,10 @@ constexpr auto kRedrawInterval = std::chrono::milliseconds(100);
 constexpr int kBarWidth = 28;
 }  // namespace
 
-Progress::Progress(std::string label, std::size_t total, std::size_t already_done, Style style)
+Progress::Progress(std::string label, std::size_t total, std::size_t already_done, Style style,
+                   std::string unit)
     : label_(std::move(label)),
+      unit_(std::move(unit)),
       total_(total),
       already_done_(already_done),
       style_(style),
@@ -65,8 +67,8 @@ void Progress::draw_locked(bool force) {
       rate > 0 ? format_duration(remaining / rate) : (remaining == 0 ? "0:00" : "--:--");
   std::string line = "\r" + label_ + " [" + std::string(filled, '#') +
                      std::string(kBarWidth - filled, '.') + "] " + std::to_string(done) + "/" +
-                     std::to_string(total_) + "  " + format_fixed(rate, 1) + " images/s  ETA " +
-                     eta + "\x1b[K";
+                     std::to_string(total_) + "  " + format_fixed(rate, 1) + " " + unit_ +
+                     "/s  ETA " + eta + "\x1b[K";
   std::cerr << line << std::flush;
   drawn_ = true;
 }
@@ -77,10 +79,10 @@ void Progress::finish(std::size_t failed) {
   if (drawn_) std::cerr << "\r\x1b[K";
   const double elapsed = elapsed_seconds();
   const double rate = elapsed > 0 ? computed_ / elapsed : 0.0;
-  std::cerr << label_ << ": " << already_done_ + computed_ << "/" << total_ << " images ("
+  std::cerr << label_ << ": " << already_done_ + computed_ << "/" << total_ << " " << unit_ << " ("
             << computed_ << " computed, " << already_done_ << " resumed, " << failed
-            << " failed) in " << format_fixed(elapsed, 1) << " s, " << format_fixed(rate, 1)
-            << " images/s\n"
+            << " failed) in " << format_fixed(elapsed, 1) << " s, " << format_fixed(rate, 1) << " "
+            << unit_ << "/s\n"
             << std::flush;
 }
 

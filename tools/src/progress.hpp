@@ -1,6 +1,6 @@
 #pragma once
 
-// Progress of a batch run on stderr. On a terminal: a bar with count, rate (images/s) and ETA,
+// Progress of a batch run on stderr. On a terminal: a bar with count, rate (items/s) and ETA,
 // redrawn at most 10 times a second. Otherwise (logs, CI): nothing until the one summary line
 // at the end. Quiet: nothing at all.
 
@@ -15,8 +15,10 @@ class Progress {
  public:
   enum class Style { kAuto, kBar, kSummaryOnly, kQuiet };
 
-  // `total` items in this run's scope, `already_done` of them finished by an earlier run.
-  Progress(std::string label, std::size_t total, std::size_t already_done, Style style);
+  // `total` items in this run's scope, `already_done` of them finished by an earlier run;
+  // `unit` names the items in the output ("images", "scenes").
+  Progress(std::string label, std::size_t total, std::size_t already_done, Style style,
+           std::string unit = "images");
 
   // One more item done by this run. Thread-safe; cheap when no redraw is due.
   void item_done();
@@ -33,6 +35,7 @@ class Progress {
   void draw_locked(bool force);
 
   std::string label_;
+  std::string unit_;
   std::size_t total_;
   std::size_t already_done_;
   Style style_;

@@ -1,0 +1,24 @@
+#pragma once
+
+// Runs the built `clutterscope` binary from end-to-end tests and captures what it printed.
+
+#include <filesystem>
+#include <string>
+
+namespace clutterscope::testing {
+
+enum class Stderr { kSeparate, kMergedIntoOutput };
+
+struct CommandRun {
+  int exit_code = -1;  // -1 when the process did not exit normally
+  bool signalled = false;
+  std::string output;  // stdout (with stderr interleaved under Stderr::kMergedIntoOutput)
+  std::string errors;  // stderr under Stderr::kSeparate
+};
+
+// `arguments` are shell words appended to the binary's path; quote paths with quoted().
+CommandRun run_clutterscope(const std::string& arguments, Stderr stderr_mode = Stderr::kSeparate);
+
+std::string quoted(const std::filesystem::path& path);
+
+}  // namespace clutterscope::testing
