@@ -23,5 +23,6 @@ void add_estimate_command(CLI::App& app, int* exit_code);
 void add_bench_estimate_command(CLI::App& app, int* exit_code);
 void add_report_command(CLI::App& app, int* exit_code);
 void add_thresholds_command(CLI::App& app, int* exit_code);
+void add_simulate_command(CLI::App& app, int* exit_code);
 
 }  // namespace clutterscope::tools

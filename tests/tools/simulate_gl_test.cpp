@@ -1,0 +1,153 @@
+// Acceptance of `clutterscope simulate` (issue 7) on the tray10 sample: with the paper's
+// threshold (0.25 cm^2) the tray is emptied in at most 5 rounds without a failed pick; with a
+// threshold 100x looser, failed picks or extra rounds appear and are logged. Also: outputs are
+// deterministic for a seed, and a scene without a graph is simulated on the inferred one.
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <clutterscope/render/context.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tools/fake_batch_support.hpp"
+
+namespace clutterscope::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+int run(const std::string& arguments, std::string* output) {
+  const std::string command = std::string(CLUTTERSCOPE_BINARY) + " " + arguments + " 2>&1";
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return -1;
+  char buffer[4096];
+  std::size_t read = 0;
+  while ((read = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) output->append(buffer, read);
+  const int status = ::pclose(pipe);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+const fs::path kTray10 = fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray10";
+
+std::vector<std::vector<std::string>> csv_rows(const std::string& text) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line)) {
+    std::vector<std::string> fields;
+    std::istringstream cells(line);
+    std::string cell;
+    while (std::getline(cells, cell, ',')) fields.push_back(cell);
+    if (!line.empty() && line.back() == ',') fields.push_back("");
+    rows.push_back(fields);
+  }
+  return rows;
+}
+
+// rounds.csv agrees with summary.json: one row per object on the tray per round, the picks
+// and failed picks of each round, and one picture per round.
+void check_outputs(const fs::path& out, const nlohmann::json& summary) {
+  const auto rows = csv_rows(testing::read_file(out / "rounds.csv"));
+  ASSERT_FALSE(rows.empty());
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"round", "gt_id", "label", "visibility", "variance",
+                                               "confident", "picked", "failed", "err_cm"}));
+  std::size_t expected_rows = 0;
+  for (const auto& round : summary.at("per_round")) {
+    const int number = round.at("round").get<int>();
+    expected_rows += round.at("objects_on_tray").get<std::size_t>();
+    int picked = 0, failed = 0;
+    for (std::size_t r = 1; r < rows.size(); ++r) {
+      if (rows[r].at(0) != std::to_string(number)) continue;
+      picked += rows[r].at(6) == "1";
+      failed += rows[r].at(7) == "1";
+      if (rows[r].at(6) == "1") EXPECT_EQ(rows[r].at(5), "1") << "picked but not confident";
+    }
+    EXPECT_EQ(picked, round.at("picks").get<int>()) << "round " << number;
+    EXPECT_EQ(failed, round.at("failed_picks").get<int>()) << "round " << number;
+    char name[32];
+    std::snprintf(name, sizeof(name), "round_%02d.svg", number);
+    const std::string picture = testing::read_file(out / "rounds" / name);
+    EXPECT_NE(picture.find("<svg"), std::string::npos) << name;
+    EXPECT_NE(picture.find("data:image/png;base64,"), std::string::npos) << name;
+  }
+  EXPECT_EQ(rows.size() - 1, expected_rows);
+  EXPECT_EQ(summary.at("failures").size(), summary.at("failed_picks").get<std::size_t>());
+  EXPECT_EQ(summary.at("left").size(), summary.at("objects_left").get<std::size_t>());
+}
+
+TEST(SimulateGl, Tray10PaperThresholdEmptiesTheTrayAndLooserOneFails) {
+  std::string why;
+  if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+  const fs::path out = testing::fresh_dir("simulate_tray10");
+  std::string output;
+  ASSERT_EQ(
+      run("simulate " + kTray10.string() + " --scene 0 --image 0 --out " + (out / "paper").string(),
+          &output),
+      0)
+      << output;
+  std::printf("%s", output.c_str());
+  const nlohmann::json paper =
+      nlohmann::json::parse(testing::read_file(out / "paper" / "summary.json"));
+  EXPECT_EQ(paper.at("stop"), "tray empty");
+  EXPECT_LE(paper.at("rounds").get<int>(), 5);
+  EXPECT_EQ(paper.at("picks").get<int>(), 10);
+  EXPECT_EQ(paper.at("failed_picks").get<int>(), 0);
+  EXPECT_EQ(paper.at("objects_left").get<int>(), 0);
+  EXPECT_EQ(paper.at("graph"), "scene_graph.json");
+  check_outputs(out / "paper", paper);
+
+  output.clear();
+  ASSERT_EQ(run("simulate " + kTray10.string() + " --scene 0 --image 0 --out " +
+                    (out / "compare").string() + " --compare-thresholds 0.25,25",
+                &output),
+            0)
+      << output;
+  std::printf("%s", output.c_str());
+  // Same seed, same threshold: the same bytes.
+  EXPECT_EQ(testing::read_file(out / "compare" / "threshold_0.25" / "rounds.csv"),
+            testing::read_file(out / "paper" / "rounds.csv"));
+  const nlohmann::json loose =
+      nlohmann::json::parse(testing::read_file(out / "compare" / "threshold_25" / "summary.json"));
+  check_outputs(out / "compare" / "threshold_25", loose);
+  const int loose_failures = loose.at("failed_picks").get<int>();
+  const int loose_rounds = loose.at("rounds").get<int>();
+  EXPECT_TRUE(loose_failures > 0 || loose_rounds > paper.at("rounds").get<int>()) << loose.dump(2);
+  const auto compare = csv_rows(testing::read_file(out / "compare" / "compare.csv"));
+  ASSERT_EQ(compare.size(), 3u);
+  EXPECT_EQ(compare[0], (std::vector<std::string>{"threshold_cm2", "rounds", "picks",
+                                                  "failed_picks", "objects_left", "stop"}));
+  EXPECT_EQ(compare[1].at(0), "0.25");
+  EXPECT_EQ(compare[1].at(3), "0");
+  EXPECT_EQ(compare[2].at(0), "25");
+  EXPECT_EQ(compare[2].at(1), std::to_string(loose_rounds));
+  EXPECT_EQ(compare[2].at(3), std::to_string(loose_failures));
+}
+
+TEST(SimulateGl, SceneWithoutGraphRunsOnTheInferredGraphAndSaysSo) {
+  std::string why;
+  if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+  const fs::path copy = testing::fresh_dir("simulate_no_graph") / "tray10";
+  fs::copy(kTray10, copy, fs::copy_options::recursive);
+  fs::remove(copy / "test" / "000000" / "scene_graph.json");
+  const fs::path out = copy.parent_path() / "out";
+  std::string output;
+  ASSERT_EQ(run("simulate " + copy.string() + " --scene 0 --image 0 --out " + out.string() +
+                    " --max-rounds 1 --particles 20 --iterations 3 --icp-samples 5",
+                &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("has no scene graph: inferred from the GT poses"), std::string::npos)
+      << output;
+  const nlohmann::json summary = nlohmann::json::parse(testing::read_file(out / "summary.json"));
+  EXPECT_NE(summary.at("graph").get<std::string>().find("inferred"), std::string::npos);
+  EXPECT_EQ(summary.at("rounds").get<int>(), 1);
+  check_outputs(out, summary);
+}
+
+}  // namespace
+}  // namespace clutterscope::tools
