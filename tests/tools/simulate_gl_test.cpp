@@ -71,7 +71,9 @@ void check_outputs(const fs::path& out, const nlohmann::json& summary) {
       if (rows[r].at(0) != std::to_string(number)) continue;
       picked += rows[r].at(6) == "1";
       failed += rows[r].at(7) == "1";
-      if (rows[r].at(6) == "1") EXPECT_EQ(rows[r].at(5), "1") << "picked but not confident";
+      if (rows[r].at(6) == "1") {
+        EXPECT_EQ(rows[r].at(5), "1") << "picked but not confident";
+      }
     }
     EXPECT_EQ(picked, round.at("picks").get<int>()) << "round " << number;
     EXPECT_EQ(failed, round.at("failed_picks").get<int>()) << "round " << number;

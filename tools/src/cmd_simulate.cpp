@@ -60,7 +60,6 @@ struct SimulateArguments {
 struct RoundView {
   cv::Mat shaded;                            // the observed scene, flat-shaded
   std::map<int, Eigen::Vector3d> estimates;  // gt_id -> estimated centre (camera)
-  std::map<int, double> variances;           // gt_id -> max variance (cm^2)
 };
 
 std::vector<double> parse_thresholds(const std::string& text) {
@@ -224,7 +223,6 @@ class Simulation {
         p.max_variance_cm2 = 1e4 * object.variance.maxCoeff();
         p.error_cm = 100 * *object.error_m;
         picture->estimates[gt_id] = object.position;
-        picture->variances[gt_id] = p.max_variance_cm2;
       }
       perceptions.push_back(p);
     }
