@@ -1,12 +1,11 @@
 // `clutterscope simulate` input checks that fail before any rendering (no EGL needed).
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cstdio>
 #include <filesystem>
 #include <string>
 
+#include "cli_run.hpp"
 #include "tools/fake_batch_support.hpp"
 
 namespace clutterscope::tools {
@@ -14,28 +13,17 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CommandRun {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
+using clutterscope::testing::CommandRun;
 
 CommandRun run(const std::string& arguments) {
-  const std::string command = std::string(CLUTTERSCOPE_BINARY) + " " + arguments + " 2>&1";
-  CommandRun result;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return result;
-  char buffer[4096];
-  std::size_t read = 0;
-  while ((read = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0)
-    result.output.append(buffer, read);
-  const int status = ::pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
+  return clutterscope::testing::run_clutterscope(arguments,
+                                                 clutterscope::testing::Stderr::kMergedIntoOutput);
 }
 
 std::string tray10_args(const fs::path& out) {
-  return "simulate " + (fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray10").string() + " --out " +
-         out.string();
+  return "simulate " +
+         clutterscope::testing::quoted(fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray10") + " --out " +
+         clutterscope::testing::quoted(out);
 }
 
 TEST(SimulateCli, NonPositiveThresholdsAreUsageErrors) {

@@ -10,7 +10,6 @@
 // simulated on the inferred one.
 
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <clutterscope/render/context.hpp>
 #include <cstdio>
@@ -20,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "cli_run.hpp"
 #include "tools/fake_batch_support.hpp"
 
 namespace clutterscope::tools {
@@ -28,15 +28,13 @@ namespace {
 namespace fs = std::filesystem;
 
 int run(const std::string& arguments, std::string* output) {
-  const std::string command = std::string(CLUTTERSCOPE_BINARY) + " " + arguments + " 2>&1";
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return -1;
-  char buffer[4096];
-  std::size_t read = 0;
-  while ((read = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) output->append(buffer, read);
-  const int status = ::pclose(pipe);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const clutterscope::testing::CommandRun result = clutterscope::testing::run_clutterscope(
+      arguments, clutterscope::testing::Stderr::kMergedIntoOutput);
+  *output += result.output;
+  return result.exit_code;
 }
+
+std::string q(const fs::path& path) { return clutterscope::testing::quoted(path); }
 
 const fs::path kTray10 = fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray10";
 
@@ -94,9 +92,7 @@ TEST(SimulateGl, Tray10PaperThresholdEmptiesTheTrayAndLooserOneFails) {
   const fs::path out = testing::fresh_dir("simulate_tray10");
   std::string output;
   ASSERT_EQ(
-      run("simulate " + kTray10.string() + " --scene 0 --image 0 --out " + (out / "paper").string(),
-          &output),
-      0)
+      run("simulate " + q(kTray10) + " --scene 0 --image 0 --out " + q(out / "paper"), &output), 0)
       << output;
   std::printf("%s", output.c_str());
   const nlohmann::json paper =
@@ -109,8 +105,8 @@ TEST(SimulateGl, Tray10PaperThresholdEmptiesTheTrayAndLooserOneFails) {
   check_outputs(out / "paper", paper);
 
   output.clear();
-  ASSERT_EQ(run("simulate " + kTray10.string() + " --scene 0 --image 0 --out " +
-                    (out / "compare").string() + " --compare-thresholds 0.25,25",
+  ASSERT_EQ(run("simulate " + q(kTray10) + " --scene 0 --image 0 --out " + q(out / "compare") +
+                    " --compare-thresholds 0.25,25",
                 &output),
             0)
       << output;
@@ -149,7 +145,7 @@ TEST(SimulateGl, SceneWithoutGraphRunsOnTheInferredGraphAndSaysSo) {
   fs::remove(copy / "test" / "000000" / "scene_graph.json");
   const fs::path out = copy.parent_path() / "out";
   std::string output;
-  ASSERT_EQ(run("simulate " + copy.string() + " --scene 0 --image 0 --out " + out.string() +
+  ASSERT_EQ(run("simulate " + q(copy) + " --scene 0 --image 0 --out " + out.string() +
                     " --max-rounds 1 --particles 20 --iterations 3 --icp-samples 5",
                 &output),
             0)
