@@ -130,6 +130,8 @@ class Simulation {
     for (const auto& object : view.objects) labels_.push_back(dataset.model(object.obj_id).label);
   }
 
+  const std::vector<std::string>& labels() const { return labels_; }
+
   RunOutcome run(double threshold, const fs::path& out) {
     simulation::UnloadingOptions options = arguments_.unloading;
     options.variance_threshold_cm2 = threshold;
@@ -338,7 +340,8 @@ class Simulation {
   render::ModelCache models_;
 };
 
-std::string describe(const simulation::UnloadingResult& result, double threshold) {
+std::string describe(const simulation::UnloadingResult& result, double threshold,
+                     const std::vector<std::string>& labels) {
   std::ostringstream out;
   out << "threshold " << threshold_text(threshold)
       << " cm^2: " << simulation::to_string(result.stop) << " after " << result.rounds.size()
@@ -348,6 +351,9 @@ std::string describe(const simulation::UnloadingResult& result, double threshold
     out << "  round " << record.round << ": " << record.objects.size() << " on the tray, "
         << record.picks << " picked, " << record.failed_picks << " failed\n";
   }
+  for (const simulation::ObjectRound& object : result.left)
+    out << "  left: " << labels[static_cast<std::size_t>(object.perception.gt_id)] << ": "
+        << object.reason << "\n";
   return out.str();
 }
 
@@ -397,7 +403,8 @@ void run_simulate(const SimulateArguments& arguments) {
     const fs::path folder =
         arguments.compare.empty() ? out : out / ("threshold_" + threshold_text(threshold));
     const RunOutcome outcome = simulation.run(threshold, folder);
-    if (!arguments.quiet) std::cout << describe(outcome.result, threshold) << std::flush;
+    if (!arguments.quiet)
+      std::cout << describe(outcome.result, threshold, simulation.labels()) << std::flush;
     CsvRow row;
     row.add(threshold_text(threshold))
         .add(static_cast<int>(outcome.result.rounds.size()))
@@ -441,9 +448,11 @@ void add_simulate_command(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   command->add_option("--max-rounds", u.max_rounds, "perception-manipulation rounds at most")
       ->capture_default_str();
-  command->add_option("--compare-thresholds", arguments->compare,
-                      "run the task once per variance threshold (cm^2, e.g. 0.25,2.5,25) into "
-                      "OUT/threshold_T/ and tabulate them in OUT/compare.csv");
+  command->add_option(
+      "--compare-thresholds", arguments->compare,
+      "run the task once per variance threshold (cm^2, e.g. 0.25,2.5,25; instead of "
+      "--variance-threshold-cm2) into OUT/threshold_T/ and tabulate them in "
+      "OUT/compare.csv");
   EstimateOptions& e = arguments->estimate;
   command->add_option("--particles", e.particles, "M, Gaussian components per message")
       ->capture_default_str();
