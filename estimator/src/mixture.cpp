@@ -79,6 +79,31 @@ Eigen::VectorXd log_evaluate(const GaussianMixture& mixture, const Eigen::Matrix
   const int d = mixture.dimension();
   const int m = mixture.size();
   const double log_two_pi = std::log(2 * M_PI);
+  if (mixture.shared_bandwidth() && points.cols() > 0) {
+    // All squared distances as one matrix product (NBP divides M x M of them out of its message
+    // weights), centred first so that the expansion does not cancel.
+    const Eigen::VectorXd centre = points.rowwise().mean();
+    const Eigen::VectorXd precision = mixture.variances.col(0).cwiseInverse();
+    const Eigen::MatrixXd a = mixture.means.colwise() - centre;
+    const Eigen::MatrixXd b = points.colwise() - centre;
+    Eigen::MatrixXd table = a.transpose() * precision.asDiagonal() * b;  // m x N
+    table.colwise() -=
+        0.5 *
+        (a.array().square().colwise() * precision.array()).colwise().sum().matrix().transpose();
+    table.rowwise() -=
+        0.5 * (b.array().square().colwise() * precision.array()).colwise().sum().matrix();
+    table = table.cwiseMin(0.0);  // rounding can make -1/2 (a - b)' P (a - b) slightly positive
+    table.colwise() += mixture.weights.array().log().matrix();
+    const double constant = -0.5 * (d * log_two_pi + mixture.variances.col(0).array().log().sum());
+    Eigen::VectorXd result(points.cols());
+    for (Eigen::Index j = 0; j < points.cols(); ++j) {
+      const double top = table.col(j).maxCoeff();
+      result[j] = std::isfinite(top)
+                      ? constant + top + std::log((table.col(j).array() - top).exp().sum())
+                      : top;
+    }
+    return result;
+  }
   // Per-component constant: log w_i - 0.5 * sum_k log(2 pi var_ik).
   Eigen::ArrayXd constant(m);
   Eigen::ArrayXXd precision(d, m);

@@ -33,6 +33,10 @@ struct BeliefSamples {
   std::vector<Eigen::VectorXd> factor_logs;  // per incidence (pointwise ones filled)
 };
 
+// Task::exclude of the product of every input when the messages are drawn from it
+// (kBeliefImportance) with M != T samples; the belief's own product is exclude = -1.
+constexpr int kAllInputs = -2;
+
 struct Task {
   int exclude = -1;  // incidence index whose message is left out; -1 for the belief
   int count = 0;
@@ -145,6 +149,7 @@ NbpResult run_nbp(const PairwiseMrf& mrf, const NbpOptions& options, std::mt1993
   const int d = mrf.dimension;
   const int m = options.particles;
   const int t_samples = options.belief_samples > 0 ? options.belief_samples : m;
+  const bool from_belief = options.message_proposal == MessageProposal::kBeliefImportance;
   ProductOptions product_options;
   product_options.method = options.product_method;
   product_options.gibbs_sweeps = options.gibbs_sweeps;
@@ -227,10 +232,22 @@ NbpResult run_nbp(const PairwiseMrf& mrf, const NbpOptions& options, std::mt1993
       std::mt19937_64 node_rng(seeds[t]);
       const std::vector<Incidence>& incs = incidences[t];
       // 1. Products: one per outgoing sampled message to a hidden node, plus the belief.
+      // With kBeliefImportance, a message whose product without the receiver would be empty
+      // keeps the initial-mixture proposal: the belief would only add the receiver's message,
+      // and dividing it out leaves weights that depend on how well it covers the pointwise
+      // unary.
+      int sampled_inputs = node.unary_mixture ? 1 : 0;
+      for (const Incidence& inc : incs) sampled_inputs += inc.sampled ? 1 : 0;
+      const bool messages_from_belief = from_belief && sampled_inputs > 1;
       std::vector<Task> tasks;
-      for (int k = 0; k < static_cast<int>(incs.size()); ++k)
-        if (incs[k].sampled && !mrf.nodes[incs[k].neighbour].fixed) tasks.push_back({k, m});
+      bool sends = false;
+      for (int k = 0; k < static_cast<int>(incs.size()); ++k) {
+        if (!incs[k].sampled || mrf.nodes[incs[k].neighbour].fixed) continue;
+        sends = true;
+        if (!messages_from_belief) tasks.push_back({k, m});
+      }
       tasks.push_back({-1, t_samples});
+      if (messages_from_belief && sends && t_samples != m) tasks.push_back({kAllInputs, m});
       int total = 0;
       for (Task& task : tasks) {
         task.offset = total;
@@ -297,18 +314,31 @@ NbpResult run_nbp(const PairwiseMrf& mrf, const NbpOptions& options, std::mt1993
         belief.factor_logs[k] = factor_values.tail(t_samples);
       }
       // 3. Normalise each task's weights and push the samples through the potentials.
-      Eigen::VectorXd weights;
+      Eigen::VectorXd weights, message_weights;
       for (const Task& task : tasks) {
         const Eigen::VectorXd task_log = log_weights.segment(task.offset, task.count);
         normalise_log_weights(task_log, &weights);
         const double ess = effective_sample_size(weights);
         summary.min_effective_sample_size = std::min(summary.min_effective_sample_size, ess);
         const Eigen::MatrixXd points = batch.middleCols(task.offset, task.count);
+        if (messages_from_belief && task.count == m && task.exclude < 0 && sends) {
+          // Every outgoing message from the full product: dividing by the receiver's message
+          // leaves the product without it as the target.
+          for (const Incidence& inc : incs) {
+            if (!inc.sampled || mrf.nodes[inc.neighbour].fixed) continue;
+            const GaussianMixture& incoming = messages[inc.edge][slot(reverse(inc.outgoing))];
+            normalise_log_weights(task_log - log_evaluate(incoming, points), &message_weights);
+            summary.min_effective_sample_size =
+                std::min(summary.min_effective_sample_size, effective_sample_size(message_weights));
+            next_messages[inc.edge][slot(inc.outgoing)] =
+                push(mrf.edges[inc.edge], inc.outgoing, points, message_weights, node_rng);
+          }
+        }
         if (task.exclude >= 0) {
           const Incidence& inc = incs[task.exclude];
           next_messages[inc.edge][slot(inc.outgoing)] =
               push(mrf.edges[inc.edge], inc.outgoing, points, weights, node_rng);
-        } else {
+        } else if (task.exclude == -1) {
           iteration_min_ess = std::min(iteration_min_ess, ess);
           belief.points = points;
           belief.log_weights = weights.array().log();

@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
 
 namespace clutterscope::estimator {
 namespace {
@@ -31,6 +33,27 @@ TEST(Mixture, LogEvaluateStaysFiniteFarAway) {
   const Eigen::VectorXd value = log_evaluate(m, Eigen::Vector3d(10, 10, 10));
   EXPECT_TRUE(std::isfinite(value[0]));
   EXPECT_LT(value[0], -1e5);
+}
+
+TEST(Mixture, SharedBandwidthLogEvaluateMatchesPerComponentVariances) {
+  // The shared-bandwidth path expands squared distances into one matrix product; the same
+  // mixture with its bandwidth repeated per component takes the direct path.
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> normal;
+  GaussianMixture shared;
+  shared.means = Eigen::MatrixXd::NullaryExpr(3, 40, [&] { return 100 + 0.01 * normal(rng); });
+  shared.weights = Eigen::VectorXd::NullaryExpr(40, [&] { return 1 + std::abs(normal(rng)); });
+  shared.weights /= shared.weights.sum();
+  shared.variances = Eigen::Vector3d(1e-6, 4e-6, 2e-6);
+  GaussianMixture per_component = shared;
+  per_component.variances = shared.variances.replicate(1, 40);
+  Eigen::MatrixXd points =
+      Eigen::MatrixXd::NullaryExpr(3, 25, [&] { return 100 + 0.01 * normal(rng); });
+  points.col(0) = Eigen::Vector3d(101, 99, 100);  // thousands of sigma away
+  const Eigen::VectorXd fast = log_evaluate(shared, points);
+  const Eigen::VectorXd direct = log_evaluate(per_component, points);
+  for (int j = 0; j < points.cols(); ++j)
+    EXPECT_NEAR(fast[j], direct[j], 1e-9 * std::max(1.0, std::abs(direct[j]))) << j;
 }
 
 TEST(Mixture, InvalidMixturesAreExplained) {

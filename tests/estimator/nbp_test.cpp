@@ -2,17 +2,20 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
+#include <utility>
 
 #include "clutterscope/estimator/gaussian_models.hpp"
 
 namespace clutterscope::estimator {
 namespace {
 
-// Acceptance: NBP at M = 200 against exact Gaussian marginals, 20 seeds. One run's mean has a
-// Monte-Carlo error of a few tenths of sigma on these models (messages carry noise along the
-// chain); averaged over the 20 runs it must be within 0.1 sigma, and the run-averaged belief
-// variance within [0.8, 1.5] of the exact one.
+// Acceptance (issue 5): NBP at M = 200 against exact Gaussian marginals, 20 seeds. The mean of
+// M independent samples of the exact marginal misses it by 1/sqrt(M) sigma (0.07 at M = 200)
+// in one run; the messages must not add more noise than that (per-run RMS error of the worst
+// node and dimension <= 1/sqrt(M)). Averaged over the seeds the error must be <= 0.1 sigma and
+// the run-averaged belief variance within [0.8, 1.5] of the exact one.
 constexpr int kRuns = 20;
 
 NbpOptions acceptance_options() {
@@ -22,15 +25,34 @@ NbpOptions acceptance_options() {
   return options;
 }
 
-void expect_accurate(const GaussianAccuracy& a) {
+double independent_sampling_error(int particles) { return 1 / std::sqrt(double(particles)); }
+
+void print(const char* name, const GaussianAccuracy& a) {
+  std::printf(
+      "%s M=%3d runs=%d: per-run rms error %.3f sigma (independent samples %.3f, min ESS %.0f), "
+      "mean |error| %.3f, seed-averaged error %.3f, variance ratio [%.3f, %.3f], %.1f ms/run\n",
+      name, a.particles, a.runs, a.rms_error_sigma, independent_sampling_error(a.particles),
+      a.min_effective_sample_size, a.mean_abs_error_sigma, a.averaged_error_sigma,
+      a.min_variance_ratio, a.max_variance_ratio, 1e3 * a.seconds_per_run);
+}
+
+// `expected_error`: the Monte-Carlo error of one run's mean that the messages must not exceed.
+void expect_accurate(const char* name, const GaussianAccuracy& a, double expected_error) {
+  print(name, a);
+  EXPECT_LE(a.rms_error_sigma, expected_error);
   EXPECT_LE(a.averaged_error_sigma, 0.1);
   EXPECT_GE(a.min_variance_ratio, 0.8);
   EXPECT_LE(a.max_variance_ratio, 1.5);
-  std::printf(
-      "M=%d runs=%d: averaged error %.3f sigma, per-run |error| %.3f sigma (rms %.3f), "
-      "variance ratio [%.3f, %.3f], %.1f ms per run\n",
-      a.particles, a.runs, a.averaged_error_sigma, a.mean_abs_error_sigma, a.rms_error_sigma,
-      a.min_variance_ratio, a.max_variance_ratio, 1e3 * a.seconds_per_run);
+}
+
+LinearGaussianModel chain_model() {
+  std::mt19937_64 model_rng(42);
+  return make_gaussian_chain(5, 3, 1.0, model_rng);
+}
+
+LinearGaussianModel grid_model() {
+  std::mt19937_64 model_rng(43);
+  return make_gaussian_grid_2x2(3, 1.0, model_rng);
 }
 
 TEST(Nbp, ExactMarginalsOfAChainMatchAnIndependentTwoNodeFormula) {
@@ -49,42 +71,60 @@ TEST(Nbp, ExactMarginalsOfAChainMatchAnIndependentTwoNodeFormula) {
 }
 
 TEST(Nbp, ChainOfFive3DMatchesExactMarginals) {
-  std::mt19937_64 model_rng(42);
-  const LinearGaussianModel model = make_gaussian_chain(5, 3, 1.0, model_rng);
-  expect_accurate(measure_gaussian_accuracy(model, false, acceptance_options(), kRuns, 1));
+  expect_accurate("chain",
+                  measure_gaussian_accuracy(chain_model(), false, acceptance_options(), kRuns, 1),
+                  independent_sampling_error(200));
 }
 
 TEST(Nbp, LoopyGrid2x2MatchesExactJointMarginals) {
-  std::mt19937_64 model_rng(43);
-  const LinearGaussianModel model = make_gaussian_grid_2x2(3, 1.0, model_rng);
-  expect_accurate(measure_gaussian_accuracy(model, false, acceptance_options(), kRuns, 1));
+  expect_accurate("grid",
+                  measure_gaussian_accuracy(grid_model(), false, acceptance_options(), kRuns, 1),
+                  independent_sampling_error(200));
 }
 
 TEST(Nbp, PointwiseUnaryThroughImportanceWeights) {
-  // Unary as a pointwise factor: the proposal of a leaf is its initial mixture (weights divide
-  // by its density), the other node's is the incoming message.
+  // Unary as a pointwise factor: the proposal of a message with no other input is the node's
+  // initial mixture N(y, 4 r) and the importance weights carry the unary, so a run's error is
+  // that of the effective sample size (about M / 3.5 in 3-D), not of M independent samples.
   std::mt19937_64 model_rng(44);
   const LinearGaussianModel model = make_gaussian_chain(2, 3, 1.0, model_rng);
-  expect_accurate(measure_gaussian_accuracy(model, true, acceptance_options(), kRuns, 1));
+  const GaussianAccuracy a = measure_gaussian_accuracy(model, true, acceptance_options(), kRuns, 1);
+  expect_accurate("pointwise", a, 1 / std::sqrt(a.min_effective_sample_size));
+}
+
+TEST(Nbp, ProductWithoutReceiverIsUnbiasedButNoisyOnTheChain) {
+  // The paper's Alg. 2 proposal: unbiased, but the chain's conflicting observations put the
+  // receivers' beliefs in the tails of the messages, where few samples lie.
+  NbpOptions options = acceptance_options();
+  options.message_proposal = MessageProposal::kProductWithoutReceiver;
+  const GaussianAccuracy product =
+      measure_gaussian_accuracy(chain_model(), false, options, kRuns, 1);
+  print("chain, Alg. 2 proposal", product);
+  EXPECT_LE(product.averaged_error_sigma, 0.1);
+  EXPECT_GE(product.min_variance_ratio, 0.8);
+  EXPECT_LE(product.max_variance_ratio, 1.5);
+  EXPECT_GT(product.rms_error_sigma, independent_sampling_error(options.particles));
 }
 
 TEST(Nbp, ErrorsShrinkWithParticles) {
-  // The table of the report (fewer runs at M = 400 to keep the suite fast).
-  std::mt19937_64 model_rng(42);
-  const LinearGaussianModel model = make_gaussian_chain(5, 3, 1.0, model_rng);
+  // The table of the report: errors for M = 50 ... 400 on both models. The per-run error
+  // shrinks about as 1/sqrt(M): at least by half from M = 50 to M = 400 (sqrt(8) = 2.8).
   NbpOptions options = acceptance_options();
-  std::vector<GaussianAccuracy> rows;
-  for (int m : {50, 100, 200, 400}) {
-    options.particles = m;
-    rows.push_back(measure_gaussian_accuracy(model, false, options, m == 400 ? 6 : 10, 101));
-    std::printf(
-        "chain M=%3d: per-run |error| %.3f sigma, rms %.3f, averaged %.3f, variance "
-        "ratio [%.3f, %.3f], %.1f ms/run\n",
-        m, rows.back().mean_abs_error_sigma, rows.back().rms_error_sigma,
-        rows.back().averaged_error_sigma, rows.back().min_variance_ratio,
-        rows.back().max_variance_ratio, 1e3 * rows.back().seconds_per_run);
+  for (const auto& [name, model] :
+       {std::pair<const char*, LinearGaussianModel>{"chain", chain_model()},
+        std::pair<const char*, LinearGaussianModel>{"grid", grid_model()}}) {
+    std::vector<GaussianAccuracy> rows;
+    for (int m : {50, 100, 200, 400}) {
+      options.particles = m;
+      rows.push_back(measure_gaussian_accuracy(model, false, options, m == 400 ? 6 : 10, 101));
+      print(name, rows.back());
+    }
+    EXPECT_LT(rows.back().rms_error_sigma, 0.5 * rows.front().rms_error_sigma) << name;
+    for (const GaussianAccuracy& row : rows) {
+      EXPECT_LE(row.rms_error_sigma, independent_sampling_error(row.particles)) << name;
+      EXPECT_LE(row.averaged_error_sigma, 0.1) << name;
+    }
   }
-  EXPECT_LT(rows.back().mean_abs_error_sigma, rows.front().mean_abs_error_sigma);
 }
 
 TEST(Nbp, DeterministicForASeed) {

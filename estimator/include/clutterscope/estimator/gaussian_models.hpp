@@ -50,6 +50,9 @@ struct GaussianAccuracy {
   double rms_error_sigma = 0;       // worst node/dim of the run-RMS mean error / sigma
   double min_variance_ratio = 0;    // run-averaged belief variance / exact, worst low
   double max_variance_ratio = 0;    // and worst high
+  // Run-averaged smallest effective sample size of any weighted product (messages included):
+  // 1 / sqrt of it is the Monte-Carlo error to expect from importance weighting.
+  double min_effective_sample_size = 0;
   double seconds_per_run = 0;
 };
 

@@ -117,6 +117,20 @@ enum class MessageBandwidth {
   kRuleOfThumb,      // always sample through psi and use the rule of thumb (the paper's Alg. 2)
 };
 
+// Where the samples x_t behind a message m_ts come from.
+enum class MessageProposal {
+  // The paper's Alg. 2: M samples of the product of t's unary and the messages m_ut, u != s,
+  // one product per outgoing message. Where the receiver's belief lies in a tail of that
+  // product, only the few samples there shape m_ts, so the message is noisy exactly where it
+  // matters (a 5-node chain with conflicting observations: 0.15-0.2 sigma per run at M = 200).
+  kProductWithoutReceiver,
+  // Sudderth et al. (2010): M samples of t's belief product (all messages), shared by every
+  // outgoing message, each weighted by 1 / m_st(x_t) so that the target is still the product
+  // without s. The samples sit where both t and s put mass, and one product per node replaces
+  // one per message.
+  kBeliefImportance,
+};
+
 struct NbpOptions {
   int particles = 100;     // M, components per message
   int iterations = 15;     // MAX BELIEF ITERATIONS
@@ -124,6 +138,7 @@ struct NbpOptions {
   int belief_samples = 0;  // T of Alg. 3; 0 means `particles`
   ProductMethod product_method = ProductMethod::kAuto;
   MessageBandwidth message_bandwidth = MessageBandwidth::kPotentialKernel;
+  MessageProposal message_proposal = MessageProposal::kBeliefImportance;
   double min_bandwidth_variance = 1e-10;  // floor of rule-of-thumb variances (units^2)
   // Pointwise pairwise factors (Eq. 7) use at most this many of the neighbour's samples (an
   // equal-weight systematic resample), so their cost grows as M, not M^2.
