@@ -9,6 +9,7 @@
 #include <set>
 
 #include "bop_json.hpp"
+#include "bop_paths.hpp"
 #include "image_size.hpp"
 
 namespace clutterscope::datasets {
@@ -16,14 +17,9 @@ namespace clutterscope::datasets {
 namespace fs = std::filesystem;
 using detail::FieldContext;
 using detail::Json;
+using detail::six_digits;
 
 namespace {
-
-std::string six_digits(int id) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%06d", id);
-  return text;
-}
 
 bool all_digits(const std::string& text) {
   return !text.empty() && text.size() <= 9 && std::all_of(text.begin(), text.end(), [](char c) {

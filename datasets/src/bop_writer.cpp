@@ -9,20 +9,16 @@
 #include <sstream>
 
 #include "bop_json.hpp"
+#include "bop_paths.hpp"
 
 namespace clutterscope::datasets {
 
 namespace fs = std::filesystem;
 using detail::FieldContext;
 using detail::Json;
+using detail::six_digits;
 
 namespace {
-
-std::string six_digits(int id) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%06d", id);
-  return text;
-}
 
 // Checks a value before it is written: outputs never hold NaN or infinity.
 double finite(double value, const char* field, const FieldContext& context) {
