@@ -138,7 +138,10 @@ struct NbpOptions {
   int belief_samples = 0;  // T of Alg. 3; 0 means `particles`
   ProductMethod product_method = ProductMethod::kAuto;
   MessageBandwidth message_bandwidth = MessageBandwidth::kPotentialKernel;
-  MessageProposal message_proposal = MessageProposal::kBeliefImportance;
+  // The paper's proposal by default: the scene estimator's accuracy was measured with it (with
+  // kBeliefImportance tray6 scores M hypotheses per node instead of (k + 1) M, about 40% less
+  // CPU, but its confident fraction at >= 90% visibility fell from 0.9 to 0.8: not yet decided).
+  MessageProposal message_proposal = MessageProposal::kProductWithoutReceiver;
   double min_bandwidth_variance = 1e-10;  // floor of rule-of-thumb variances (units^2)
   // Pointwise pairwise factors (Eq. 7) use at most this many of the neighbour's samples (an
   // equal-weight systematic resample), so their cost grows as M, not M^2.
