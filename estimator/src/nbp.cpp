@@ -246,8 +246,8 @@ NbpResult run_nbp(const PairwiseMrf& mrf, const NbpOptions& options, std::mt1993
         sends = true;
         if (!messages_from_belief) tasks.push_back({k, m});
       }
-      tasks.push_back({-1, t_samples});
       if (messages_from_belief && sends && t_samples != m) tasks.push_back({kAllInputs, m});
+      tasks.push_back({-1, t_samples});  // last: factor_logs keep the batch's tail
       int total = 0;
       for (Task& task : tasks) {
         task.offset = total;
