@@ -170,7 +170,7 @@ TEST_F(ReportSvg, ImagePanelsEmbedThePngAndDrawEachObject) {
   // Estimate ring (halo + ring) in both panels, and once in the marker legend.
   EXPECT_EQ(count(svg, "r=\"7\""), 2 * 2 + 2);
   EXPECT_NE(svg.find(">confident estimate<"), std::string::npos);
-  EXPECT_EQ(svg.find(">not confident<"), std::string::npos);
+  EXPECT_EQ(svg.find(">not confident estimate<"), std::string::npos);
   EXPECT_NE(svg.find(">coffee<"), std::string::npos);
   EXPECT_NE(svg.find(">tea<"), std::string::npos);
   EXPECT_EQ(svg.find("http://", svg.find("xmlns") + 40), std::string::npos);
@@ -204,7 +204,8 @@ TEST_F(ReportSvg, ImagePanelsMarkUncertainEstimatesAndGroundTruth) {
             std::string::npos)
       << svg;
   EXPECT_EQ(count(svg, "<polygon"), 2 * 2);  // the object's and the legend's
-  for (const char* entry : {">confident estimate<", ">not confident<", ">ground-truth centre<"}) {
+  for (const char* entry :
+       {">confident estimate<", ">not confident estimate<", ">ground-truth centre<"}) {
     EXPECT_NE(svg.find(entry), std::string::npos) << entry;
   }
   EXPECT_EQ(svg.find(">belief sample<"), std::string::npos);  // no samples drawn

@@ -77,7 +77,8 @@ std::vector<ImageSummary> choose_belief_images(const std::vector<ImageSummary>& 
 std::vector<int> shown_iterations(int last) {
   std::vector<int> iterations;
   for (int iteration : {1, (last + 1) / 2, last}) {
-    if (iteration >= 1 && (iterations.empty() || iteration > iterations.back())) {
+    if (iteration >= 1 && iteration <= last &&
+        (iterations.empty() || iteration > iterations.back())) {
       iterations.push_back(iteration);
     }
   }

@@ -683,17 +683,17 @@ std::string image_panels(const std::string& title, const BackgroundImage& backgr
     double x = kGap;
     const double y = legend_top + (legend_rows - 1) * kLegendRow;
     const auto entry = [&](const std::string& marker, const std::string& text) {
-      out << marker << text_element(x + 16, y + 4, text, "start");
+      out << marker << text_element(x + 24, y + 4, text, "start");
       x += legend_column;
     };
     if (any_samples) {
-      entry("<circle cx=\"" + num(x + 6) + "\" cy=\"" + num(y) + "\" r=\"2.5\" fill=\"" +
+      entry("<circle cx=\"" + num(x + 10) + "\" cy=\"" + num(y) + "\" r=\"2.5\" fill=\"" +
                 grey.hex() + "\"/>\n",
             "belief sample");
     }
-    if (any_confident) entry(estimate_marker(x + 6, y, grey, true), "confident estimate");
-    if (any_uncertain) entry(estimate_marker(x + 6, y, grey, false), "not confident");
-    if (any_truth) entry(ground_truth_marker(x + 6, y, grey), "ground-truth centre");
+    if (any_confident) entry(estimate_marker(x + 10, y, grey, true), "confident estimate");
+    if (any_uncertain) entry(estimate_marker(x + 10, y, grey, false), "not confident estimate");
+    if (any_truth) entry(ground_truth_marker(x + 10, y, grey), "ground-truth centre");
   }
   out << "</svg>\n";
   return out.str();
