@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <clutterscope/tools/report/beliefs.hpp>
 #include <clutterscope/tools/report/report.hpp>
 #include <clutterscope/tools/report/svg.hpp>
 #include <map>
@@ -54,22 +55,33 @@ TEST(ReportBrowser, ChromiumLoadsReportWithoutErrorsAndEveryPlotHasASize) {
   options.bootstrap.resamples = 300;
   const ReportAnalysis analysis = analyse_report(rows, {}, options);
   std::vector<NamedPlot> plots = standard_plots(rows, analysis);
-  // A belief figure as the report command adds (paper Fig. 2 d-f): points over an image.
-  cv::Mat image(120, 160, CV_8UC3, cv::Scalar(200, 200, 200));
-  cv::rectangle(image, {40, 30}, {100, 90}, cv::Scalar(60, 90, 160), cv::FILLED);
-  std::vector<svg::ProjectedObject> objects;
-  for (int k = 0; k < 3; ++k) {
-    svg::ProjectedObject object{"object " + std::to_string(k),
-                                svg::category_colour(k),
-                                {},
-                                std::array<double, 2>{40.0 + 30 * k, 60.0}};
-    for (int s = 0; s < 20; ++s) object.points.push_back({35.0 + 30 * k + s % 5, 50.0 + s});
-    objects.push_back(object);
+  // Two belief figures as the report command adds (paper Fig. 2 d-f, Fig. 3): samples over
+  // an image beside the final estimates, one image per figure.
+  for (int im = 0; im < 2; ++im) {
+    BeliefImage figure;
+    figure.image = analysis.images[static_cast<size_t>(im)];
+    cv::Mat raster(120, 160, CV_8UC3, cv::Scalar(200, 200, 200));
+    cv::rectangle(raster, {40, 30}, {100, 90}, cv::Scalar(60, 90, 160), cv::FILLED);
+    figure.background = svg::BackgroundImage::from_raster(raster);
+    figure.background_kind = "RGB image";
+    figure.K << 100, 0, 80, 0, 100, 60, 0, 0, 1;
+    for (const ObjectRow& row : rows) {
+      if (row.im_id != figure.image.im_id) continue;
+      figure.objects.push_back(row);
+      if (!row.estimate) continue;
+      const Eigen::Vector3d centre =
+          1e-3 * Eigen::Vector3d(row.estimate->x_mm, row.estimate->y_mm, row.estimate->z_mm);
+      figure.ground_truth_m[row.gt_id] = centre + Eigen::Vector3d(0.005, 0.0, 0.0);
+      for (int iteration = 1; iteration <= 15; ++iteration) {
+        for (int s = 0; s < 20; ++s) {
+          const double spread = 0.002 * (16 - iteration) * (s % 5 - 2);
+          figure.samples.push_back({row.gt_id, row.obj_id, iteration,
+                                    centre + Eigen::Vector3d(spread, 0.001 * (s / 5), 0.0), 0.05});
+        }
+      }
+    }
+    plots.push_back(belief_plot(figure, options.variance_threshold_cm2));
   }
-  plots.push_back({"beliefs_test_1_0", "Belief samples and final estimates.",
-                   svg::image_panels("Beliefs on test scene 1 image 0",
-                                     svg::BackgroundImage::from_raster(image),
-                                     {{"initial beliefs", objects}, {"final", objects}})});
   const ReportFiles files = write_report(dir / "report", rows, analysis, plots, {});
 
   // 1. Load report.html as written: screenshot, and no console output or failed load.

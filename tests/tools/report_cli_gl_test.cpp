@@ -157,9 +157,62 @@ TEST_F(ReportCli, WritesTheReportFolderAndPrintsTheSummary) {
   EXPECT_EQ(run.at("visibility_options").at("mode").get<std::string>(), "rendered");
 
   const nlohmann::json run_json = nlohmann::json::parse(*first_run_json_);
-  for (const char* step : {"visibility", "estimate"}) {
+  for (const char* step : {"visibility", "estimate", "beliefs"}) {
     EXPECT_EQ(run_json.at(step).at("computed").get<int>(), 2) << step;
     EXPECT_EQ(run_json.at(step).at("resumed").get<int>(), 0) << step;
+  }
+}
+
+// Rows of an estimates.csv for one image, without time_ms (measured, so it differs per run).
+std::vector<std::string> estimate_rows_without_time(const fs::path& csv, int scene_id) {
+  std::vector<std::string> rows;
+  for (const std::string& line : lines_of(read_text(csv))) {
+    if (line.rfind("test," + std::to_string(scene_id) + ",0,", 0) != 0) continue;
+    rows.push_back(line.substr(0, line.rfind(',')));
+  }
+  return rows;
+}
+
+TEST_F(ReportCli, DrawsBeliefFiguresFromTheSameEstimatesAsTheReport) {
+  // Two images: both drawn (most and least cluttered), each estimated again alone with
+  // --save-beliefs into beliefs/SPLIT_SCENE_IMID.
+  const fs::path dir = report_dir();
+  const std::string html = read_text(dir / "report.html");
+  for (int scene = 0; scene < 2; ++scene) {
+    SCOPED_TRACE(scene);
+    const std::string name = "beliefs_test_" + std::to_string(scene) + "_0";
+    ASSERT_TRUE(fs::is_regular_file(dir / "plots" / (name + ".svg")));
+    const std::string svg = read_text(dir / "plots" / (name + ".svg"));
+    EXPECT_NE(svg.find("beliefs after iteration 1<"), std::string::npos);
+    EXPECT_NE(svg.find("beliefs after iteration 2 (last)<"), std::string::npos);
+    EXPECT_NE(svg.find(">final estimates (ICP, fused)<"), std::string::npos);
+    EXPECT_NE(svg.find("r=\"1.8\""), std::string::npos);  // samples drawn
+    EXPECT_NE(html.find("<figure id=\"plot-" + name + "\""), std::string::npos);
+
+    const fs::path run_dir = dir / "beliefs" / ("test_00000" + std::to_string(scene) + "_000000");
+    const fs::path samples =
+        run_dir / "beliefs" / "test" / ("00000" + std::to_string(scene)) / "000000.csv";
+    ASSERT_TRUE(fs::is_regular_file(samples));
+    EXPECT_GT(rows_of(samples), 0u);
+    // Per-image random streams: the re-estimated image has the report's estimates.
+    const std::vector<std::string> again =
+        estimate_rows_without_time(run_dir / "estimates.csv", scene);
+    EXPECT_FALSE(again.empty());
+    EXPECT_EQ(again, estimate_rows_without_time(dir / "estimate" / "estimates.csv", scene));
+  }
+}
+
+TEST_F(ReportCli, WithSaveBeliefsTheEstimateStepsSamplesAreDrawn) {
+  const fs::path dir = *root_ / "saved_beliefs";
+  const CommandRun saved = run(report_arguments(dataset(), dir, " --save-beliefs --no-notebook"));
+  ASSERT_EQ(saved.exit_code, 0) << saved.errors;
+  EXPECT_TRUE(fs::is_regular_file(dir / "estimate" / "beliefs" / "test" / "000000" / "000000.csv"));
+  EXPECT_FALSE(fs::exists(dir / "beliefs"));  // nothing estimated twice
+  EXPECT_EQ(read_json(dir / "run.json").at("beliefs").at("computed").get<int>(), 0);
+  // The same samples, so the same figures as the report that re-estimated the two images.
+  for (const char* name : {"beliefs_test_0_0.svg", "beliefs_test_1_0.svg"}) {
+    EXPECT_TRUE(read_text(dir / "plots" / name) == first_bytes_->at(std::string("plots/") + name))
+        << name;
   }
 }
 
@@ -168,7 +221,7 @@ TEST_F(ReportCli, RerunOnAFinishedFolderDoesNoWorkAndRewritesIdenticalBytes) {
   ASSERT_EQ(again.exit_code, 0) << again.errors;
   EXPECT_EQ(again.output, first_report_->output);
   const nlohmann::json run_json = read_json(report_dir() / "run.json");
-  for (const char* step : {"visibility", "estimate"}) {
+  for (const char* step : {"visibility", "estimate", "beliefs"}) {
     EXPECT_EQ(run_json.at(step).at("computed").get<int>(), 0) << step;
     EXPECT_EQ(run_json.at(step).at("resumed").get<int>(), 2) << step;
   }

@@ -188,6 +188,26 @@ TEST(ReportStatistics, CorrelationsWithVisibilityUseTheRightObjects) {
   EXPECT_DOUBLE_EQ(*error.spearman.estimate.value, -1.0);
 }
 
+TEST(ReportStatistics, ZeroAndTinyVariancesCountAtTheFloorOfTheLogVariance) {
+  // A zero variance (all ICP fits on one point) and one below the floor are kept, at the floor.
+  std::vector<ObjectRow> rows = {object(0.1, 10.0, 3.0),  object(0.5, 1.0, 1.0),
+                                 object(0.9, 0.0, 0.1),   object(1.0, 1e-12, 0.2),
+                                 object(0.95, 1e-6, 0.2), unestimated(1.0)};
+  std::mt19937_64 rng(1);
+  BootstrapOptions options;
+  options.resamples = 200;
+  const CorrelationPair variance = variance_visibility_correlation(rows, options, rng);
+  EXPECT_EQ(variance.spearman.n, 5);
+  EXPECT_EQ(variance.excluded, 1);
+  EXPECT_EQ(variance.floored, 2);
+  // log10 variance = 1, 0, -8, -8, -6 against 0.1, 0.5, 0.9, 1.0, 0.95.
+  EXPECT_NEAR(*variance.pearson.estimate.value,
+              *pearson({1, 0, -8, -8, -6}, {0.1, 0.5, 0.9, 1.0, 0.95}).value, 1e-12);
+  EXPECT_NEAR(*variance.spearman.estimate.value,
+              *spearman({1, 0, -8, -8, -6}, {0.1, 0.5, 0.9, 1.0, 0.95}).value, 1e-12);
+  EXPECT_EQ(error_visibility_correlation(rows, options, rng).floored, 0);
+}
+
 TEST(ReportStatistics, VisibilityBandEdges) {
   EXPECT_EQ(visibility_band(0.0), 0);
   EXPECT_EQ(visibility_band(0.0999), 0);

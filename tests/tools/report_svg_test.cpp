@@ -151,21 +151,64 @@ TEST_F(ReportSvg, ImagePanelsEmbedThePngAndDrawEachObject) {
   svg::ProjectedObject coffee{"coffee",
                               svg::category_colour(0),
                               {{10, 10}, {20, 30}, {500, 5}},
-                              std::array<double, 2>{15, 20}};
-  svg::ProjectedObject tea{"tea", svg::category_colour(1), {{70, 50}}, std::nullopt};
+                              std::array<double, 2>{15, 20},
+                              true,
+                              std::nullopt};
+  svg::ProjectedObject tea{"tea",       svg::category_colour(1), {{70, 50}}, std::nullopt, true,
+                           std::nullopt};
   const std::string svg =
       svg::image_panels("Beliefs", background,
                         {{"initial beliefs", {coffee, tea}}, {"final estimates", {coffee}}}, 160);
   EXPECT_TRUE(well_formed("panels", svg));
-  EXPECT_EQ(count(svg, "href=\"data:image/png;base64," + svg::base64(background.png_bytes)), 2);
+  // The image is embedded once and used by both panels.
+  EXPECT_EQ(count(svg, "href=\"data:image/png;base64," + svg::base64(background.png_bytes)), 1);
+  EXPECT_EQ(count(svg, "<use href=\"#bg-"), 2);
   // Panel scale 2: the first sample (10, 10) lands at (12 + 20, 62 + 20).
   EXPECT_NE(svg.find("cx=\"32.00\" cy=\"82.00\" r=\"1.8\""), std::string::npos) << svg;
   // (500, 5) is outside the 80 x 60 image: clipped. Samples: 2 + 1 + 2 = 5.
   EXPECT_EQ(count(svg, "r=\"1.8\""), 5);
-  EXPECT_EQ(count(svg, "r=\"7\""), 2 * 2);  // estimate ring (halo + ring) in both panels
+  // Estimate ring (halo + ring) in both panels, and once in the marker legend.
+  EXPECT_EQ(count(svg, "r=\"7\""), 2 * 2 + 2);
+  EXPECT_NE(svg.find(">confident estimate<"), std::string::npos);
+  EXPECT_EQ(svg.find(">not confident estimate<"), std::string::npos);
   EXPECT_NE(svg.find(">coffee<"), std::string::npos);
   EXPECT_NE(svg.find(">tea<"), std::string::npos);
   EXPECT_EQ(svg.find("http://", svg.find("xmlns") + 40), std::string::npos);
+
+  // A figure with another title gets another image id: two figures can share one HTML page.
+  const std::string other = svg::image_panels("Other", background, {{"final", {coffee}}}, 160);
+  const auto id_of = [](const std::string& text) {
+    const size_t at = text.find("<image id=\"");
+    return text.substr(at + 11, text.find('"', at + 11) - at - 11);
+  };
+  EXPECT_NE(id_of(svg), id_of(other));
+}
+
+TEST_F(ReportSvg, ImagePanelsMarkUncertainEstimatesAndGroundTruth) {
+  const svg::BackgroundImage background =
+      svg::BackgroundImage::from_raster(cv::Mat(60, 80, CV_8UC1, cv::Scalar(90)));
+  const svg::ProjectedObject sure{"sure", svg::category_colour(0),
+                                  {},     std::array<double, 2>{20, 20},
+                                  true,   std::array<double, 2>{22, 21}};
+  const svg::ProjectedObject unsure{
+      "unsure", svg::category_colour(1), {}, std::array<double, 2>{60, 40}, false, std::nullopt};
+  const std::string svg =
+      svg::image_panels("Estimates", background, {{"final", {sure, unsure}}}, 80);
+  EXPECT_TRUE(well_formed("markers", svg));
+  // Scale 1, panel at (12, 62): the uncertain estimate is a dashed ring at (72, 102).
+  EXPECT_NE(svg.find("<circle cx=\"72.00\" cy=\"102.00\" r=\"9\" stroke-dasharray"),
+            std::string::npos)
+      << svg;
+  // The ground truth is a diamond (halo + outline) around (34, 83).
+  EXPECT_NE(svg.find("points=\"34.00,77.00 40.00,83.00 34.00,89.00 28.00,83.00\""),
+            std::string::npos)
+      << svg;
+  EXPECT_EQ(count(svg, "<polygon"), 2 * 2);  // the object's and the legend's
+  for (const char* entry :
+       {">confident estimate<", ">not confident estimate<", ">ground-truth centre<"}) {
+    EXPECT_NE(svg.find(entry), std::string::npos) << entry;
+  }
+  EXPECT_EQ(svg.find(">belief sample<"), std::string::npos);  // no samples drawn
 }
 
 }  // namespace

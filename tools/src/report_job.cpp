@@ -7,10 +7,16 @@
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/notebooks_export/notebook.hpp>
 #include <clutterscope/tools/batch.hpp>
+#include <clutterscope/tools/report/beliefs.hpp>
 #include <clutterscope/tools/report/report.hpp>
 #include <clutterscope/tools/report/tables.hpp>
+#include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <functional>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -166,6 +172,161 @@ void write_run_json(const fs::path& dir, const std::vector<StepRun>& steps, doub
   datasets::write_file_atomically(dir / "run.json", run.dump(2) + "\n");
 }
 
+// The forwarded estimate options, then the report's threshold and seed: they are the
+// estimator's too, so that "confident" and the random streams mean the same in DIR/estimate
+// and in the report.
+void append_estimate_options(const ReportArguments& arguments, std::vector<std::string>* line) {
+  for (const auto& [name, value] : arguments.estimate) {
+    line->push_back(name);
+    if (!value.empty()) line->push_back(value);
+  }
+  line->insert(line->end(), {"--variance-threshold-cm2",
+                             report::format_number(arguments.analysis.variance_threshold_cm2),
+                             "--seed", std::to_string(arguments.analysis.seed)});
+}
+
+std::string six_digits(int id) {
+  char text[16];
+  std::snprintf(text, sizeof(text), "%06d", id);
+  return text;
+}
+
+// ---- Belief figures ----
+
+// The largest background width embedded: enough for the figure's panels, and it keeps
+// report.html small for datasets with large images.
+constexpr int kMaxBackgroundWidth = 640;
+
+// Belief samples are saved for the drawn images only: the estimate step runs again on each
+// of them, alone, with --save-beliefs, into DIR/beliefs/SPLIT_SCENE_IMID. Per-image random
+// streams make its estimates those of DIR/estimate; its batch runner makes a re-run reuse it.
+fs::path belief_run_dir(const fs::path& dir, const report::ImageSummary& image) {
+  return dir / "beliefs" /
+         (image.split + "_" + six_digits(image.scene_id) + "_" + six_digits(image.im_id));
+}
+
+fs::path beliefs_csv(const fs::path& estimate_dir, const report::ImageSummary& image) {
+  return estimate_dir / "beliefs" / image.split / six_digits(image.scene_id) /
+         (six_digits(image.im_id) + ".csv");
+}
+
+std::vector<std::string> belief_command_line(const ReportArguments& arguments,
+                                             const report::ImageSummary& image,
+                                             const fs::path& out) {
+  std::vector<std::string> line = {"estimate", arguments.dataset.dataset,
+                                   "--out",    out.string(),
+                                   "--split",  image.split,
+                                   "--scenes", std::to_string(image.scene_id),
+                                   "--images", std::to_string(image.im_id),
+                                   "--jobs",   "1",
+                                   "--quiet",  "--save-beliefs"};
+  if (arguments.dataset.keep_going) line.push_back("--keep-going");
+  append_estimate_options(arguments, &line);
+  return line;
+}
+
+// The image under the samples: the RGB image, else the measured depth shaded (near bright),
+// else a grey frame; at most kMaxBackgroundWidth wide. `K` is mapped onto its pixel grid.
+void load_background(const datasets::SceneView& view, report::BeliefImage* figure) {
+  cv::Mat raster;
+  if (!view.rgb_path.empty()) {
+    raster = cv::imread(view.rgb_path.string(), cv::IMREAD_COLOR);
+    if (raster.empty()) throw datasets::DatasetError(view.rgb_path, "cannot be read as an image");
+    figure->background_kind = "RGB image";
+  } else if (!view.depth_path.empty()) {
+    const cv::Mat depth = datasets::load_depth(view);
+    double near = 0.0, far = 0.0;
+    cv::minMaxLoc(depth, nullptr, &far);
+    cv::Mat valid = depth > 0;
+    cv::minMaxLoc(depth, &near, nullptr, nullptr, nullptr, valid);
+    raster = cv::Mat(depth.size(), CV_8UC1, cv::Scalar(0));
+    const double span = far > near ? far - near : 1.0;
+    for (int v = 0; v < depth.rows; ++v) {
+      for (int u = 0; u < depth.cols; ++u) {
+        const float value = depth.at<float>(v, u);
+        if (value > 0) {
+          raster.at<std::uint8_t>(v, u) =
+              static_cast<std::uint8_t>(std::lround(230.0 - 180.0 * (value - near) / span));
+        }
+      }
+    }
+    figure->background_kind = "measured depth (shaded, near bright)";
+  } else {
+    raster = cv::Mat(view.camera.height, view.camera.width, CV_8UC1, cv::Scalar(200));
+    figure->background_kind = "image frame (the dataset has no RGB or depth image)";
+  }
+  Eigen::Matrix3d K = view.camera.K;
+  if (view.camera.width > 0 && view.camera.height > 0) {
+    K.row(0) *= static_cast<double>(raster.cols) / view.camera.width;
+    K.row(1) *= static_cast<double>(raster.rows) / view.camera.height;
+  }
+  if (raster.cols > kMaxBackgroundWidth) {
+    const double scale = static_cast<double>(kMaxBackgroundWidth) / raster.cols;
+    cv::Mat smaller;
+    cv::resize(raster, smaller,
+               cv::Size(kMaxBackgroundWidth, static_cast<int>(std::lround(raster.rows * scale))), 0,
+               0, cv::INTER_AREA);
+    K.row(0) *= static_cast<double>(smaller.cols) / raster.cols;
+    K.row(1) *= static_cast<double>(smaller.rows) / raster.rows;
+    raster = smaller;
+  }
+  figure->background = report::svg::BackgroundImage::from_raster(raster);
+  figure->K = K;
+}
+
+struct BeliefFigures {
+  std::vector<report::NamedPlot> plots;
+  StepRun step{"beliefs"};
+  int exit_code = 0;
+};
+
+// The belief figures of the chosen images. With --save-beliefs the estimate step saved every
+// image's samples already; otherwise each chosen image is estimated again (once: a re-run
+// resumes it).
+BeliefFigures belief_figures(const ReportArguments& arguments, const fs::path& dir,
+                             const std::vector<report::ObjectRow>& objects,
+                             const report::ReportAnalysis& analysis) {
+  BeliefFigures figures;
+  const std::vector<report::ImageSummary> chosen =
+      report::choose_belief_images(analysis.images, arguments.analysis.images_with_beliefs);
+  if (chosen.empty()) return figures;
+  const bool saved_by_estimate = arguments.estimate.count("--save-beliefs") > 0;
+  const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset.dataset);
+  for (const report::ImageSummary& image : chosen) {
+    fs::path samples = beliefs_csv(dir / "estimate", image);
+    if (!saved_by_estimate) {
+      const fs::path out = belief_run_dir(dir, image);
+      figures.exit_code = std::max(figures.exit_code,
+                                   parse_step(belief_command_line(arguments, image, out), false));
+      const StepRun step = read_step_run(out, "beliefs");
+      figures.step.computed += step.computed;
+      figures.step.resumed += step.resumed;
+      figures.step.failed += step.failed;
+      figures.step.seconds += step.seconds;
+      samples = beliefs_csv(out, image);
+    }
+    if (!fs::exists(samples)) continue;  // failed under --keep-going (listed in its summary)
+    report::BeliefImage figure;
+    figure.image = image;
+    const datasets::SceneView view = dataset.load({image.split, image.scene_id, image.im_id});
+    load_background(view, &figure);
+    for (const report::ObjectRow& object : objects) {
+      if (object.split == image.split && object.scene_id == image.scene_id &&
+          object.im_id == image.im_id) {
+        figure.objects.push_back(object);
+      }
+    }
+    for (size_t gt = 0; gt < view.objects.size(); ++gt) {
+      const datasets::ModelInfo& model = dataset.model(view.objects[gt].obj_id);
+      figure.ground_truth_m[static_cast<int>(gt)] =
+          view.objects[gt].model_to_camera * (model.min + 0.5 * model.size);
+    }
+    figure.samples = report::read_beliefs_csv(samples);
+    figures.plots.push_back(report::belief_plot(figure, arguments.analysis.variance_threshold_cm2));
+  }
+  return figures;
+}
+
 }  // namespace
 
 std::vector<std::string> step_command_line(const ReportArguments& arguments,
@@ -178,17 +339,13 @@ std::vector<std::string> step_command_line(const ReportArguments& arguments,
   if (!dataset.images.empty()) line.insert(line.end(), {"--images", dataset.images});
   if (dataset.keep_going) line.push_back("--keep-going");
   if (dataset.quiet) line.push_back("--quiet");
-  const bool estimate = command == "estimate";
-  for (const auto& [name, value] : estimate ? arguments.estimate : arguments.visibility) {
-    line.push_back(name);
-    if (!value.empty()) line.push_back(value);
-  }
-  if (estimate) {
-    // The report's threshold and seed are the estimator's too, so that "confident" and the
-    // random streams mean the same in DIR/estimate and in the report.
-    line.insert(line.end(), {"--variance-threshold-cm2",
-                             report::format_number(arguments.analysis.variance_threshold_cm2),
-                             "--seed", std::to_string(arguments.analysis.seed)});
+  if (command == "estimate") {
+    append_estimate_options(arguments, &line);
+  } else {
+    for (const auto& [name, value] : arguments.visibility) {
+      line.push_back(name);
+      if (!value.empty()) line.push_back(value);
+    }
   }
   return line;
 }
@@ -270,7 +427,11 @@ ReportRun run_report(const ReportArguments& arguments) {
       estimates_csv);
   const report::ReportAnalysis analysis = report::analyse_report(
       objects, report::read_images_csv(visibility_dir / "images.csv"), arguments.analysis);
-  const std::vector<report::NamedPlot> plots = report::standard_plots(objects, analysis);
+  std::vector<report::NamedPlot> plots = report::standard_plots(objects, analysis);
+  BeliefFigures beliefs = belief_figures(arguments, dir, objects, analysis);
+  run.exit_code = std::max(run.exit_code, beliefs.exit_code);
+  run.steps.push_back(beliefs.step);
+  plots.insert(plots.end(), beliefs.plots.begin(), beliefs.plots.end());
   run.files = report::write_report(dir, objects, analysis, plots, run_record(arguments, dir));
   if (arguments.notebook) write_notebook(dir, arguments.analysis);
   run.console_summary = report::format_console_summary(analysis);

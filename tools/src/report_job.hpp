@@ -5,6 +5,11 @@
 // DIR/estimate and DIR/visibility (their batch runners resume finished images and refuse a
 // different job), then joins and analyses their tables and writes the report files into DIR.
 //
+// The belief figures (paper Fig. 2 d-f, Fig. 3) need belief samples, which the estimate step
+// saves only with --save-beliefs: without it, the drawn images (report::choose_belief_images)
+// are estimated again, one by one with --save-beliefs, into DIR/beliefs/SPLIT_SCENE_IMID (the
+// same per-image random streams, so the same estimates; a re-run reuses them).
+//
 // DIR/.report/job.json records the dataset selection and the forwarded options; a run with a
 // different dataset or different result-changing options is refused before any work. Analysis
 // options (--accurate-cm, --visibility-cutoff) only change the report files, which are
@@ -44,7 +49,7 @@ struct StepRun {
 };
 
 struct ReportRun {
-  std::vector<StepRun> steps;  // estimate, visibility
+  std::vector<StepRun> steps;  // estimate, visibility, beliefs (the belief figures' images)
   report::ReportFiles files;
   std::string console_summary;  // format_console_summary
   int exit_code = 0;            // 1 when images failed under --keep-going

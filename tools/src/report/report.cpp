@@ -57,11 +57,16 @@ Json correlation_json(const CorrelationWithInterval& c, const BootstrapOptions& 
   return json;
 }
 
-Json correlation_pair_json(const CorrelationPair& pair, const BootstrapOptions& bootstrap) {
-  return {{"quantity", pair.quantity},
-          {"excluded", pair.excluded},
-          {"pearson", correlation_json(pair.pearson, bootstrap)},
-          {"spearman", correlation_json(pair.spearman, bootstrap)}};
+Json correlation_pair_json(const CorrelationPair& pair, const BootstrapOptions& bootstrap,
+                           bool floored_variance) {
+  Json json = {{"quantity", pair.quantity}, {"excluded", pair.excluded}};
+  if (floored_variance) {
+    json["floor_cm2"] = kLogVarianceFloorCm2;
+    json["floored"] = pair.floored;
+  }
+  json["pearson"] = correlation_json(pair.pearson, bootstrap);
+  json["spearman"] = correlation_json(pair.spearman, bootstrap);
+  return json;
 }
 
 Json threshold_row_json(const ThresholdRow& row) {
@@ -135,6 +140,10 @@ bool ReportOptions::IsValid(std::string* why) const {
   if (!thresholds.IsValid(why) || !bootstrap.IsValid(why)) return false;
   if (images_with_bars < 0) {
     *why = "images with visibility bars must be >= 0, got " + std::to_string(images_with_bars);
+    return false;
+  }
+  if (images_with_beliefs < 0) {
+    *why = "images with belief figures must be >= 0, got " + std::to_string(images_with_beliefs);
     return false;
   }
   return true;
@@ -284,10 +293,11 @@ nlohmann::ordered_json summary_json(const ReportAnalysis& analysis, const Json& 
   visibility["undefined"] = undefined;
   json["visibility"] = visibility;
 
-  json["correlations"] = {{"log10_variance_vs_visibility",
-                           correlation_pair_json(analysis.variance_correlation, options.bootstrap)},
-                          {"error_vs_visibility",
-                           correlation_pair_json(analysis.error_correlation, options.bootstrap)}};
+  json["correlations"] = {
+      {"log10_variance_vs_visibility",
+       correlation_pair_json(analysis.variance_correlation, options.bootstrap, true)},
+      {"error_vs_visibility",
+       correlation_pair_json(analysis.error_correlation, options.bootstrap, false)}};
 
   Json bands = Json::array();
   for (const VisibilityBand& band : analysis.bands) {
@@ -495,7 +505,10 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
           << "</td></tr>\n";
     }
   }
-  out << "</table>\n</section>\n";
+  out << "</table>\n<p class=\"meta\">The log variance is log10 of max(variance, "
+      << general(kLogVarianceFloorCm2) << " cm&sup2;): " << analysis.variance_correlation.floored
+      << " estimates with a smaller variance (an exactly zero variance: all ICP fits on one "
+         "point) count at that floor.</p>\n</section>\n";
 
   // Visibility bands.
   out << "<section id=\"bands\">\n<h2>By visibility band</h2>\n<table>\n<tr><th>visibility</th>"

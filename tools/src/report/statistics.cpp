@@ -197,14 +197,19 @@ CorrelationPair variance_visibility_correlation(const std::vector<ObjectRow>& ob
                                                 const BootstrapOptions& options,
                                                 std::mt19937_64& rng) {
   std::vector<double> log_variance, visibility;
+  int floored = 0;
   for (const ObjectRow& object : objects) {
-    if (!object.estimate || object.estimate->max_variance_cm2() <= 0.0) continue;
-    log_variance.push_back(std::log10(object.estimate->max_variance_cm2()));
+    if (!object.estimate) continue;
+    const double variance = object.estimate->max_variance_cm2();
+    floored += variance < kLogVarianceFloorCm2;
+    log_variance.push_back(std::log10(std::max(variance, kLogVarianceFloorCm2)));
     visibility.push_back(object.visib_fract);
   }
   const int excluded = static_cast<int>(objects.size() - log_variance.size());
-  return correlate_with_visibility("log10_max_variance_cm2", log_variance, visibility, excluded,
-                                   options, rng);
+  CorrelationPair pair = correlate_with_visibility("log10_max_variance_cm2", log_variance,
+                                                   visibility, excluded, options, rng);
+  pair.floored = floored;
+  return pair;
 }
 
 CorrelationPair error_visibility_correlation(const std::vector<ObjectRow>& objects,

@@ -556,6 +556,48 @@ std::vector<std::array<double, 2>> project_to_pixels(const Eigen::Matrix3d& K,
   return pixels;
 }
 
+namespace {
+
+// Estimate and ground-truth markers centred at (cx, cy), in `colour` over a white halo.
+std::string estimate_marker(double cx, double cy, Colour colour, bool confident) {
+  std::ostringstream out;
+  if (confident) {
+    out << "<g stroke=\"" << colour.hex() << "\" stroke-width=\"2\" fill=\"none\">"
+        << "<circle cx=\"" << num(cx) << "\" cy=\"" << num(cy) << "\" r=\"7\" "
+        << "stroke=\"#ffffff\" stroke-width=\"4\"/><circle cx=\"" << num(cx) << "\" cy=\""
+        << num(cy) << "\" r=\"7\"/><line x1=\"" << num(cx - 10) << "\" y1=\"" << num(cy)
+        << "\" x2=\"" << num(cx + 10) << "\" y2=\"" << num(cy) << "\"/><line x1=\"" << num(cx)
+        << "\" y1=\"" << num(cy - 10) << "\" x2=\"" << num(cx) << "\" y2=\"" << num(cy + 10)
+        << "\"/></g>\n";
+  } else {
+    out << "<g stroke=\"" << colour.hex() << "\" stroke-width=\"2\" fill=\"none\">"
+        << "<circle cx=\"" << num(cx) << "\" cy=\"" << num(cy) << "\" r=\"9\" "
+        << "stroke=\"#ffffff\" stroke-width=\"4\"/><circle cx=\"" << num(cx) << "\" cy=\""
+        << num(cy) << "\" r=\"9\" stroke-dasharray=\"3 3\"/><circle cx=\"" << num(cx) << "\" cy=\""
+        << num(cy) << "\" r=\"2\" fill=\"" << colour.hex() << "\"/></g>\n";
+  }
+  return out.str();
+}
+
+std::string ground_truth_marker(double cx, double cy, Colour colour) {
+  std::ostringstream out;
+  const std::string points = num(cx) + "," + num(cy - 6) + " " + num(cx + 6) + "," + num(cy) + " " +
+                             num(cx) + "," + num(cy + 6) + " " + num(cx - 6) + "," + num(cy);
+  out << "<g fill=\"none\"><polygon points=\"" << points
+      << "\" stroke=\"#ffffff\" stroke-width=\"4\"/><polygon points=\"" << points << "\" stroke=\""
+      << colour.hex() << "\" stroke-width=\"2\"/></g>\n";
+  return out.str();
+}
+
+// FNV-1a, for ids that differ between figures of one HTML page.
+std::uint64_t fnv1a(const std::string& bytes) {
+  std::uint64_t hash = 0xcbf29ce484222325ULL;
+  for (unsigned char c : bytes) hash = (hash ^ c) * 0x100000001b3ULL;
+  return hash;
+}
+
+}  // namespace
+
 std::string image_panels(const std::string& title, const BackgroundImage& background,
                          const std::vector<ImagePanel>& panels, int panel_width) {
   if (background.width <= 0 || background.height <= 0) {
@@ -569,51 +611,61 @@ std::string image_panels(const std::string& title, const BackgroundImage& backgr
   const int panel_height = static_cast<int>(std::lround(background.height * scale));
   const int count = std::max<int>(1, panels.size());
   std::vector<std::pair<std::string, Colour>> legend;
+  bool any_samples = false, any_confident = false, any_uncertain = false, any_truth = false;
   for (const ImagePanel& panel : panels) {
     for (const ProjectedObject& object : panel.objects) {
       const bool listed = std::any_of(legend.begin(), legend.end(), [&](const auto& entry) {
         return entry.first == object.label;
       });
       if (!listed) legend.emplace_back(object.label, object.colour);
+      any_samples |= !object.points.empty();
+      any_confident |= object.estimate && object.estimate_confident;
+      any_uncertain |= object.estimate && !object.estimate_confident;
+      any_truth |= object.ground_truth.has_value();
     }
   }
-  const int legend_rows = (static_cast<int>(legend.size()) + kLegendPerRow - 1) / kLegendPerRow;
+  const bool marker_legend = any_confident || any_uncertain || any_truth;
+  const int legend_rows =
+      (static_cast<int>(legend.size()) + kLegendPerRow - 1) / kLegendPerRow + marker_legend;
   const int width = kGap + count * (panel_width + kGap);
   const int images_top = kMarginTop + kPanelTitle;
   const int height = images_top + panel_height + kGap + legend_rows * kLegendRow + kGap;
-  const std::string uri = "data:image/png;base64," + base64(background.png_bytes);
+  char id[32];
+  std::snprintf(id, sizeof(id), "bg-%016llx",
+                static_cast<unsigned long long>(fnv1a(title + background.png_bytes)));
 
   std::ostringstream out;
   out << svg_open(width, height, title);
+  out << "<defs><image id=\"" << id << "\" width=\"" << panel_width << "\" height=\""
+      << panel_height << "\" preserveAspectRatio=\"none\" href=\"data:image/png;base64,"
+      << base64(background.png_bytes) << "\"/></defs>\n";
+  const auto inside = [&](const std::array<double, 2>& point) {
+    return std::isfinite(point[0]) && std::isfinite(point[1]) && point[0] >= 0 && point[1] >= 0 &&
+           point[0] <= background.width && point[1] <= background.height;
+  };
   for (size_t p = 0; p < panels.size(); ++p) {
     const double left = kGap + p * (panel_width + kGap);
     out << text_element(left + panel_width / 2.0, images_top - 8, panels[p].title, "middle",
                         " font-size=\"13\"");
-    out << "<image x=\"" << num(left) << "\" y=\"" << images_top << "\" width=\"" << panel_width
-        << "\" height=\"" << panel_height << "\" preserveAspectRatio=\"none\" href=\"" << uri
-        << "\"/>\n";
+    out << "<use href=\"#" << id << "\" x=\"" << num(left) << "\" y=\"" << images_top << "\"/>\n";
     for (const ProjectedObject& object : panels[p].objects) {
-      const auto inside = [&](const std::array<double, 2>& point) {
-        return std::isfinite(point[0]) && std::isfinite(point[1]) && point[0] >= 0 &&
-               point[1] >= 0 && point[0] <= background.width && point[1] <= background.height;
-      };
-      out << "<g fill=\"" << object.colour.hex() << "\" fill-opacity=\"0.75\">\n";
-      for (const auto& point : object.points) {
-        if (!inside(point)) continue;
-        out << "<circle cx=\"" << num(left + point[0] * scale) << "\" cy=\""
-            << num(images_top + point[1] * scale) << "\" r=\"1.8\"/>\n";
+      if (!object.points.empty()) {
+        out << "<g fill=\"" << object.colour.hex() << "\" fill-opacity=\"0.75\">\n";
+        for (const auto& point : object.points) {
+          if (!inside(point)) continue;
+          out << "<circle cx=\"" << num(left + point[0] * scale) << "\" cy=\""
+              << num(images_top + point[1] * scale) << "\" r=\"1.8\"/>\n";
+        }
+        out << "</g>\n";
       }
-      out << "</g>\n";
+      if (object.ground_truth && inside(*object.ground_truth)) {
+        out << ground_truth_marker(left + (*object.ground_truth)[0] * scale,
+                                   images_top + (*object.ground_truth)[1] * scale, object.colour);
+      }
       if (object.estimate && inside(*object.estimate)) {
-        const double cx = left + (*object.estimate)[0] * scale;
-        const double cy = images_top + (*object.estimate)[1] * scale;
-        out << "<g stroke=\"" << object.colour.hex() << "\" stroke-width=\"2\" fill=\"none\">"
-            << "<circle cx=\"" << num(cx) << "\" cy=\"" << num(cy) << "\" r=\"7\" "
-            << "stroke=\"#ffffff\" stroke-width=\"4\"/><circle cx=\"" << num(cx) << "\" cy=\""
-            << num(cy) << "\" r=\"7\"/><line x1=\"" << num(cx - 10) << "\" y1=\"" << num(cy)
-            << "\" x2=\"" << num(cx + 10) << "\" y2=\"" << num(cy) << "\"/><line x1=\"" << num(cx)
-            << "\" y1=\"" << num(cy - 10) << "\" x2=\"" << num(cx) << "\" y2=\"" << num(cy + 10)
-            << "\"/></g>\n";
+        out << estimate_marker(left + (*object.estimate)[0] * scale,
+                               images_top + (*object.estimate)[1] * scale, object.colour,
+                               object.estimate_confident);
       }
     }
   }
@@ -625,6 +677,23 @@ std::string image_panels(const std::string& title, const BackgroundImage& backgr
     out << "<circle cx=\"" << num(x + 6) << "\" cy=\"" << num(y) << "\" r=\"5\" fill=\""
         << legend[i].second.hex() << "\"/>\n";
     out << text_element(x + 16, y + 4, legend[i].first, "start");
+  }
+  if (marker_legend) {
+    const Colour grey{90, 90, 90};
+    double x = kGap;
+    const double y = legend_top + (legend_rows - 1) * kLegendRow;
+    const auto entry = [&](const std::string& marker, const std::string& text) {
+      out << marker << text_element(x + 24, y + 4, text, "start");
+      x += legend_column;
+    };
+    if (any_samples) {
+      entry("<circle cx=\"" + num(x + 10) + "\" cy=\"" + num(y) + "\" r=\"2.5\" fill=\"" +
+                grey.hex() + "\"/>\n",
+            "belief sample");
+    }
+    if (any_confident) entry(estimate_marker(x + 10, y, grey, true), "confident estimate");
+    if (any_uncertain) entry(estimate_marker(x + 10, y, grey, false), "not confident estimate");
+    if (any_truth) entry(ground_truth_marker(x + 10, y, grey), "ground-truth centre");
   }
   out << "</svg>\n";
   return out.str();

@@ -28,6 +28,8 @@ struct ReportOptions {
   BootstrapOptions bootstrap;
   std::uint64_t seed = 1;    // --seed; the bootstrap draws from a stream derived from it
   int images_with_bars = 3;  // per-image visibility bar charts (most cluttered first)
+  // Belief figures (beliefs.hpp): most cluttered, median and least cluttered image.
+  int images_with_beliefs = 3;
   bool IsValid(std::string* why) const;
 };
 

@@ -91,13 +91,21 @@ CorrelationWithInterval bootstrap_correlation(const std::vector<double>& x,
 // Correlations of one quantity against visibility.
 struct CorrelationPair {
   std::string quantity;  // e.g. "log10_max_variance_cm2"
-  int excluded = 0;      // objects left out (no estimate, no error, variance <= 0)
+  int excluded = 0;      // objects left out (no estimate; for the error also no GT error)
+  int floored = 0;       // variance only: objects counted at kLogVarianceFloorCm2
   CorrelationWithInterval pearson;
   CorrelationWithInterval spearman;
 };
 
-// log10(max-axis variance) against visib_fract, over objects with an estimate and a
-// positive variance. Pearson is drawn from `rng` first, then Spearman.
+// The log-variance correlation takes log10(max(variance, this)). A fused variance is exactly 0
+// when all K ICP fits end on the same point: the most certain estimates, which leaving out
+// would bias the correlation. (1 um)^2 is far below any spread the estimator resolves
+// (estimates.csv positions have 1 um steps, depth noise is ~1 mm), so the floor changes no
+// variance that carries information.
+constexpr double kLogVarianceFloorCm2 = 1e-8;
+
+// log10(max(max-axis variance, kLogVarianceFloorCm2)) against visib_fract, over objects with
+// an estimate. Pearson is drawn from `rng` first, then Spearman.
 CorrelationPair variance_visibility_correlation(const std::vector<ObjectRow>& objects,
                                                 const BootstrapOptions& options,
                                                 std::mt19937_64& rng);

@@ -117,8 +117,10 @@ struct BackgroundImage {
 struct ProjectedObject {
   std::string label;
   Colour colour;
-  std::vector<std::array<double, 2>> points;      // belief samples, drawn as dots
-  std::optional<std::array<double, 2>> estimate;  // final estimate, drawn as a ringed cross
+  std::vector<std::array<double, 2>> points;          // belief samples, drawn as dots
+  std::optional<std::array<double, 2>> estimate;      // final estimate, drawn as a ringed cross
+  bool estimate_confident = true;                     // false: a dashed ring and no cross
+  std::optional<std::array<double, 2>> ground_truth;  // drawn as a hollow diamond
 };
 
 // Projects camera-frame points (metres, OpenCV pinhole) to image pixel coordinates with K:
@@ -136,7 +138,9 @@ struct ImagePanel {
 };
 
 // Panels side by side over the same background, each scaled to `panel_width` pixels, with a
-// legend of object labels in their colours. Points outside the image are clipped.
+// legend of object labels in their colours and, when a panel has estimates or ground truth, of
+// the markers. Points outside the image are clipped. The background is embedded once (an
+// <image> in <defs> that each panel <use>s, its id derived from the title and the image).
 std::string image_panels(const std::string& title, const BackgroundImage& background,
                          const std::vector<ImagePanel>& panels, int panel_width = 360);
 
