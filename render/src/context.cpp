@@ -60,12 +60,23 @@ Function egl_function(const char* name) {
   return reinterpret_cast<Function>(eglGetProcAddress(name));
 }
 
-// An initialised EGL display shared by every context of the process. EGL displays are
-// per-device singletons and eglTerminate would destroy every other thread's context, so
-// displays are reference-counted here and terminated only when the last context is gone.
+// Which display a context uses. Mesa creates one llvmpipe screen per EGL display, and contexts
+// on one screen rasterise one scene at a time (the screen's rasterizer queue is locked), so
+// worker threads on one display do not render in parallel. The software device of the device
+// platform and the surfaceless platform are two displays with independent screens: contexts
+// of the software renderer are spread over both.
+enum class DisplayKind {
+  kChosen,               // the device picked by open_display (or the surfaceless fallback)
+  kSurfacelessSoftware,  // the surfaceless platform as a second software screen
+};
+
+// An initialised EGL display shared by contexts of the process. EGL displays are per-device
+// singletons and eglTerminate would destroy every other thread's context, so displays are
+// reference-counted here and terminated only when the last context is gone.
 struct SharedDisplay {
   EGLDisplay display = EGL_NO_DISPLAY;
-  std::string description;  // which platform/device was used, for error messages
+  std::string description;       // which platform/device was used, for error messages
+  bool software_device = false;  // a device with EGL_MESA_device_software
   int references = 0;
 };
 
@@ -74,37 +85,63 @@ std::mutex& display_mutex() {
   return mutex;
 }
 
-std::map<int, SharedDisplay>& displays() {  // keyed by requested device index (-1 = auto)
-  static std::map<int, SharedDisplay> map;
+// Keyed by requested device index (-1 = auto) and kind.
+std::map<std::pair<int, DisplayKind>, SharedDisplay>& displays() {
+  static std::map<std::pair<int, DisplayKind>, SharedDisplay> map;
   return map;
+}
+
+// Set when the surfaceless platform cannot serve as a second software screen (no such
+// platform, or it renders on something else than the software device), so it is not retried.
+bool& second_screen_refused() {
+  static bool refused = false;
+  return refused;
 }
 
 struct DeviceChoice {
   EGLDisplay display = EGL_NO_DISPLAY;
   std::string description;
+  bool software_device = false;
 };
+
+auto platform_display_function() {
+  return egl_function<PFNEGLGETPLATFORMDISPLAYEXTPROC>("eglGetPlatformDisplayEXT");
+}
+
+bool initialise(EGLDisplay display, const std::string& description, std::string* failures) {
+  if (display == EGL_NO_DISPLAY) {
+    *failures += "\n  " + description + ": no display (" + egl_error_name(eglGetError()) + ")";
+    return false;
+  }
+  EGLint major = 0, minor = 0;
+  if (eglInitialize(display, &major, &minor) != EGL_TRUE) {
+    *failures +=
+        "\n  " + description + ": eglInitialize failed (" + egl_error_name(eglGetError()) + ")";
+    return false;
+  }
+  return true;
+}
+
+// The surfaceless Mesa platform, initialised, or EGL_NO_DISPLAY (reason in `failures`).
+EGLDisplay open_surfaceless(std::string* failures) {
+  const char* client_extensions = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+  auto get_platform_display = platform_display_function();
+  if (get_platform_display == nullptr ||
+      !has_extension(client_extensions, "EGL_MESA_platform_surfaceless")) {
+    *failures += "\n  EGL_MESA_platform_surfaceless: not supported by this EGL";
+    return EGL_NO_DISPLAY;
+  }
+  EGLDisplay display =
+      get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+  return initialise(display, "surfaceless Mesa platform", failures) ? display : EGL_NO_DISPLAY;
+}
 
 // Device platform first (a hardware device preferred over EGL_MESA_device_software), then
 // the surfaceless Mesa platform. Returns an initialised display or throws RenderError.
 DeviceChoice open_display(int device_index) {
   const char* client_extensions = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
   std::string failures;
-  auto get_platform_display =
-      egl_function<PFNEGLGETPLATFORMDISPLAYEXTPROC>("eglGetPlatformDisplayEXT");
-
-  auto try_initialise = [&](EGLDisplay display, const std::string& description) -> bool {
-    if (display == EGL_NO_DISPLAY) {
-      failures += "\n  " + description + ": no display (" + egl_error_name(eglGetError()) + ")";
-      return false;
-    }
-    EGLint major = 0, minor = 0;
-    if (eglInitialize(display, &major, &minor) != EGL_TRUE) {
-      failures +=
-          "\n  " + description + ": eglInitialize failed (" + egl_error_name(eglGetError()) + ")";
-      return false;
-    }
-    return true;
-  };
+  auto get_platform_display = platform_display_function();
 
   if (get_platform_display != nullptr &&
       has_extension(client_extensions, "EGL_EXT_platform_device")) {
@@ -120,6 +157,12 @@ DeviceChoice open_display(int device_index) {
         throw RenderError("EGL device index " + std::to_string(device_index) +
                           " requested, but only " + std::to_string(count) + " devices exist");
       }
+      const auto is_software = [&](int i) {
+        const char* extensions = query_device_string != nullptr
+                                     ? query_device_string(devices[i], EGL_EXTENSIONS)
+                                     : nullptr;
+        return has_extension(extensions, "EGL_MESA_device_software");
+      };
       // Candidate order: the requested device, else hardware devices before software ones.
       std::vector<int> order;
       if (device_index >= 0) {
@@ -127,18 +170,16 @@ DeviceChoice open_display(int device_index) {
       } else {
         for (int pass = 0; pass < 2; ++pass) {
           for (int i = 0; i < count; ++i) {
-            const char* extensions = query_device_string != nullptr
-                                         ? query_device_string(devices[i], EGL_EXTENSIONS)
-                                         : nullptr;
-            const bool software = has_extension(extensions, "EGL_MESA_device_software");
-            if (software == (pass == 1)) order.push_back(i);
+            if (is_software(i) == (pass == 1)) order.push_back(i);
           }
         }
       }
       for (const int i : order) {
         const std::string description = "EGL device " + std::to_string(i);
         EGLDisplay display = get_platform_display(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
-        if (try_initialise(display, description)) return {display, description};
+        if (initialise(display, description, &failures)) {
+          return {display, description, is_software(i)};
+        }
       }
     } else {
       failures += "\n  EGL_EXT_device_enumeration: no devices";
@@ -147,13 +188,9 @@ DeviceChoice open_display(int device_index) {
     failures += "\n  EGL_EXT_platform_device: not supported by this EGL";
   }
 
-  if (device_index < 0 && get_platform_display != nullptr &&
-      has_extension(client_extensions, "EGL_MESA_platform_surfaceless")) {
-    EGLDisplay display =
-        get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-    if (try_initialise(display, "surfaceless Mesa platform")) {
-      return {display, "surfaceless Mesa platform"};
-    }
+  if (device_index < 0) {
+    EGLDisplay display = open_surfaceless(&failures);
+    if (display != EGL_NO_DISPLAY) return {display, "surfaceless Mesa platform", false};
   }
   throw RenderError(
       "no usable EGL display (install libegl1 libegl-mesa0 libgl1-mesa-dri for the software "
@@ -161,25 +198,59 @@ DeviceChoice open_display(int device_index) {
       failures);
 }
 
-EGLDisplay acquire_display(int device_index) {
+using DisplayKey = std::pair<int, DisplayKind>;
+
+// Takes a reference on the display a new context should use: the chosen device, or, for the
+// automatically chosen software device, whichever of it and the surfaceless platform holds
+// fewer contexts.
+DisplayKey acquire_display(int device_index, bool allow_second_screen) {
   std::lock_guard<std::mutex> lock(display_mutex());
-  SharedDisplay& shared = displays()[device_index];
-  if (shared.references == 0) {
+  const DisplayKey chosen_key{device_index, DisplayKind::kChosen};
+  SharedDisplay& chosen = displays()[chosen_key];
+  if (chosen.references == 0) {
     DeviceChoice choice = open_display(device_index);
-    shared.display = choice.display;
-    shared.description = choice.description;
+    chosen.display = choice.display;
+    chosen.description = choice.description;
+    chosen.software_device = choice.software_device;
   }
-  ++shared.references;
-  return shared.display;
+  if (allow_second_screen && device_index < 0 && chosen.software_device &&
+      !second_screen_refused()) {
+    const DisplayKey second_key{device_index, DisplayKind::kSurfacelessSoftware};
+    SharedDisplay& second = displays()[second_key];
+    if (second.references < chosen.references) {
+      if (second.references == 0) {
+        std::string failures;
+        second.display = open_surfaceless(&failures);
+        second.description = "surfaceless Mesa platform (second software screen)";
+      }
+      if (second.display != EGL_NO_DISPLAY) {
+        ++second.references;
+        return second_key;
+      }
+      second_screen_refused() = true;
+    }
+  }
+  ++chosen.references;
+  return chosen_key;
 }
 
-void release_display(int device_index) {
+void release_display(const DisplayKey& key) {
   std::lock_guard<std::mutex> lock(display_mutex());
-  SharedDisplay& shared = displays()[device_index];
+  SharedDisplay& shared = displays()[key];
   if (--shared.references == 0) {
     eglTerminate(shared.display);
     shared.display = EGL_NO_DISPLAY;
   }
+}
+
+EGLDisplay display_of(const DisplayKey& key) {
+  std::lock_guard<std::mutex> lock(display_mutex());
+  return displays()[key].display;
+}
+
+void refuse_second_screen() {
+  std::lock_guard<std::mutex> lock(display_mutex());
+  second_screen_refused() = true;
 }
 
 std::string gl_string(GLenum name) {
@@ -190,7 +261,7 @@ std::string gl_string(GLenum name) {
 }  // namespace
 
 struct EglContext::State {
-  int device_index = -1;
+  DisplayKey key;
   EGLDisplay display = EGL_NO_DISPLAY;
   EGLContext context = EGL_NO_CONTEXT;
   std::string renderer;
@@ -214,7 +285,7 @@ EglContext::~EglContext() {
   }
   eglDestroyContext(state_->display, state_->context);
   eglReleaseThread();
-  release_display(state_->device_index);
+  release_display(state_->key);
 }
 
 EglContext EglContext::create(const EglOptions& options) {
@@ -222,13 +293,29 @@ EglContext EglContext::create(const EglOptions& options) {
     throw RenderError("EglOptions::device_index must be >= -1, got " +
                       std::to_string(options.device_index));
   }
+  for (bool allow_second = true;; allow_second = false) {
+    try {
+      EglContext context = create_on_display(options.device_index, allow_second);
+      // The surfaceless platform may pick a GPU render node: the second screen must be the
+      // same software renderer, or workers would not give identical results.
+      if (context.state_->key.second == DisplayKind::kChosen || context.is_software()) {
+        return context;
+      }
+    } catch (const RenderError&) {
+      if (!allow_second) throw;
+    }
+    refuse_second_screen();
+  }
+}
+
+EglContext EglContext::create_on_display(int device_index, bool allow_second_screen) {
   auto state = std::make_unique<State>();
-  state->device_index = options.device_index;
-  state->display = acquire_display(options.device_index);
+  state->key = acquire_display(device_index, allow_second_screen);
+  state->display = display_of(state->key);
   struct DisplayGuard {  // gives the display reference back if creation fails below
     State* state;
     ~DisplayGuard() {
-      if (state != nullptr) release_display(state->device_index);
+      if (state != nullptr) release_display(state->key);
     }
   } guard{state.get()};
 
@@ -309,8 +396,7 @@ bool EglContext::is_software() const {
 
 bool egl_available(std::string* why_not) {
   try {
-    acquire_display(-1);
-    release_display(-1);
+    release_display(acquire_display(-1, false));
     return true;
   } catch (const RenderError& error) {
     if (why_not != nullptr) *why_not = error.what();

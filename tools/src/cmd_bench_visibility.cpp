@@ -1,7 +1,9 @@
 // `clutterscope bench visibility`: times, in one run on a generated workload, (a) our Eq. 10
 // visibility, (b) one full-scene render with readback (the floor), (c) bop_toolkit's method
 // (each object rendered alone on the 3W x 3H canvas, read back, compared on the CPU), and the
-// throughput of --jobs 2 against --jobs 1 (one render context per worker thread).
+// throughput of --jobs 2 against --jobs 1 (one render context per worker thread), with the CPU
+// cores each keeps busy: llvmpipe rasterises with one thread per core by default, so --jobs 1
+// already uses more than one core.
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -15,6 +17,8 @@
 #include <clutterscope/visibility/image_visibility.hpp>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <ctime>
 #include <iostream>
 #include <memory>
 #include <mutex>
@@ -40,6 +44,7 @@ struct BenchArguments {
   int jobs = 2;
   std::uint64_t seed = 20261122;
   bool per_image = false;
+  bool throughput_only = false;
 };
 
 // A closed cylinder (axis z) of about `triangles` triangles: sides and two fan caps.
@@ -218,8 +223,19 @@ Stats stats_of(std::vector<double> values) {
   return stats;
 }
 
-// Wall time to compute (a) for every image with `jobs` threads, each with its own context.
-double throughput_run(const Workload& workload, int jobs) {
+struct ThroughputRun {
+  double seconds = 0;      // wall time
+  double cpu_seconds = 0;  // of the whole process (llvmpipe's rasterizer threads included)
+};
+
+double process_cpu_seconds() {
+  timespec time{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &time);
+  return static_cast<double>(time.tv_sec) + 1e-9 * static_cast<double>(time.tv_nsec);
+}
+
+// Computes (a) for every image with `jobs` threads, each with its own context.
+ThroughputRun throughput_run(const Workload& workload, int jobs) {
   std::vector<std::unique_ptr<BenchContext>> contexts(static_cast<std::size_t>(jobs));
   std::atomic<std::size_t> next{0};
   std::atomic<int> ready{0};
@@ -227,6 +243,7 @@ double throughput_run(const Workload& workload, int jobs) {
   std::exception_ptr failure;
   std::mutex failure_mutex;
   Clock::time_point start;
+  double cpu_start = 0;
   std::vector<std::thread> threads;
   for (int t = 0; t < jobs; ++t) {
     threads.emplace_back([&, t] {
@@ -249,11 +266,26 @@ double throughput_run(const Workload& workload, int jobs) {
   }
   while (ready < jobs) std::this_thread::yield();
   start = Clock::now();
+  cpu_start = process_cpu_seconds();
   go = true;
   for (std::thread& thread : threads) thread.join();
-  const double seconds = seconds_since(start);
+  const ThroughputRun run{seconds_since(start), process_cpu_seconds() - cpu_start};
   if (failure) std::rethrow_exception(failure);
-  return seconds;
+  return run;
+}
+
+// --jobs 1 against --jobs N, printed with the CPU time per image and the cores kept busy.
+void compare_jobs(const Workload& workload, int jobs, const char* label, const char* target) {
+  const ThroughputRun one = throughput_run(workload, 1);
+  const ThroughputRun many = throughput_run(workload, jobs);
+  const double images = static_cast<double>(workload.poses.size());
+  std::printf("throughput, %s:\n", label);
+  for (const auto& [n, run] : {std::pair<int, const ThroughputRun&>{1, one}, {jobs, many}}) {
+    std::printf("  --jobs %d %6.1f images/s, %6.2f ms CPU per image, %.2f cores busy\n", n,
+                images / run.seconds, 1e3 * run.cpu_seconds / images,
+                run.cpu_seconds / run.seconds);
+  }
+  std::printf("  ratio %.2f%s\n", one.seconds / many.seconds, target);
 }
 
 void run_bench(const BenchArguments& arguments) {
@@ -273,63 +305,74 @@ void run_bench(const BenchArguments& arguments) {
 
   std::vector<double> time_ours, time_floor, time_bop;
   double max_fraction_difference = 0;
+  bool software = false;
   {
     BenchContext bench(workload);
     std::printf("renderer: %s\n", bench.context.renderer().c_str());
-    const render::Intrinsics image = render::Intrinsics::from_camera(workload.camera);
-    // Warm up every path once (shader compilation, buffer allocation).
-    ours(bench, workload, 0);
-    bench.renderer.render(image, bench.instances(workload, 0));
-    bop_toolkit_method(bench, workload, 0);
-    if (arguments.per_image) std::printf("image,ours_ms,floor_ms,bop_toolkit_ms\n");
-    for (std::size_t i = 0; i < workload.poses.size(); ++i) {
-      Clock::time_point start = Clock::now();
-      const visibility::ImageVisibility a = ours(bench, workload, i);
-      time_ours.push_back(seconds_since(start));
+    software = bench.context.is_software();
+    if (!arguments.throughput_only) {
+      const render::Intrinsics image = render::Intrinsics::from_camera(workload.camera);
+      // Warm up every path once (shader compilation, buffer allocation).
+      ours(bench, workload, 0);
+      bench.renderer.render(image, bench.instances(workload, 0));
+      bop_toolkit_method(bench, workload, 0);
+      if (arguments.per_image) std::printf("image,ours_ms,floor_ms,bop_toolkit_ms\n");
+      for (std::size_t i = 0; i < workload.poses.size(); ++i) {
+        Clock::time_point start = Clock::now();
+        const visibility::ImageVisibility a = ours(bench, workload, i);
+        time_ours.push_back(seconds_since(start));
 
-      start = Clock::now();
-      const render::DepthLabelImage floor =
-          bench.renderer.render(image, bench.instances(workload, i));
-      time_floor.push_back(seconds_since(start));
+        start = Clock::now();
+        const render::DepthLabelImage floor =
+            bench.renderer.render(image, bench.instances(workload, i));
+        time_floor.push_back(seconds_since(start));
 
-      start = Clock::now();
-      const std::vector<visibility::BopGtInfo> c = bop_toolkit_method(bench, workload, i);
-      time_bop.push_back(seconds_since(start));
+        start = Clock::now();
+        const std::vector<visibility::BopGtInfo> c = bop_toolkit_method(bench, workload, i);
+        time_bop.push_back(seconds_since(start));
 
-      for (std::size_t o = 0; o < c.size(); ++o) {
-        // bop_toolkit's visib_fract is visible / canvas silhouette; ours over the same base.
-        const double ours_fraction = a.objects[o].info.px_count_all > 0
-                                         ? static_cast<double>(a.objects[o].info.px_count_visib) /
-                                               static_cast<double>(a.objects[o].info.px_count_all)
-                                         : 0.0;
-        max_fraction_difference =
-            std::max(max_fraction_difference, std::abs(ours_fraction - c[o].visib_fract));
-      }
-      if (arguments.per_image) {
-        std::printf("%zu,%.3f,%.3f,%.3f\n", i, 1e3 * time_ours.back(), 1e3 * time_floor.back(),
-                    1e3 * time_bop.back());
+        for (std::size_t o = 0; o < c.size(); ++o) {
+          // bop_toolkit's visib_fract is visible / canvas silhouette; ours over the same base.
+          const double ours_fraction = a.objects[o].info.px_count_all > 0
+                                           ? static_cast<double>(a.objects[o].info.px_count_visib) /
+                                                 static_cast<double>(a.objects[o].info.px_count_all)
+                                           : 0.0;
+          max_fraction_difference =
+              std::max(max_fraction_difference, std::abs(ours_fraction - c[o].visib_fract));
+        }
+        if (arguments.per_image) {
+          std::printf("%zu,%.3f,%.3f,%.3f\n", i, 1e3 * time_ours.back(), 1e3 * time_floor.back(),
+                      1e3 * time_bop.back());
+        }
       }
     }
   }
-  const Stats a = stats_of(time_ours), b = stats_of(time_floor), c = stats_of(time_bop);
-  std::printf("per image (ms)                          mean   median      p90\n");
-  std::printf("(a) ours: Eq. 10 counts on the GPU  %8.2f %8.2f %8.2f\n", 1e3 * a.mean,
-              1e3 * a.median, 1e3 * a.p90);
-  std::printf("(b) floor: scene render + readback  %8.2f %8.2f %8.2f\n", 1e3 * b.mean,
-              1e3 * b.median, 1e3 * b.p90);
-  std::printf("(c) bop_toolkit method              %8.2f %8.2f %8.2f\n", 1e3 * c.mean,
-              1e3 * c.median, 1e3 * c.p90);
-  std::printf("ratio (a)/(b) = %.2f (target <= 2.0)\n", a.mean / b.mean);
-  std::printf("ratio (c)/(a) = %.2f (target >= 5)\n", c.mean / a.mean);
-  std::printf("agreement: max |visible/px_count_all| difference between (a) and (c) = %.4f\n",
-              max_fraction_difference);
-  if (arguments.jobs >= 2) {
-    const double one = throughput_run(workload, 1);
-    const double many = throughput_run(workload, arguments.jobs);
-    std::printf(
-        "throughput: --jobs 1 %.1f images/s, --jobs %d %.1f images/s, ratio %.2f "
-        "(target >= 1.7 for --jobs 2)\n",
-        workload.poses.size() / one, arguments.jobs, workload.poses.size() / many, one / many);
+  if (!arguments.throughput_only) {
+    const Stats a = stats_of(time_ours), b = stats_of(time_floor), c = stats_of(time_bop);
+    std::printf("per image (ms)                          mean   median      p90\n");
+    std::printf("(a) ours: Eq. 10 counts on the GPU  %8.2f %8.2f %8.2f\n", 1e3 * a.mean,
+                1e3 * a.median, 1e3 * a.p90);
+    std::printf("(b) floor: scene render + readback  %8.2f %8.2f %8.2f\n", 1e3 * b.mean,
+                1e3 * b.median, 1e3 * b.p90);
+    std::printf("(c) bop_toolkit method              %8.2f %8.2f %8.2f\n", 1e3 * c.mean,
+                1e3 * c.median, 1e3 * c.p90);
+    std::printf("ratio (a)/(b) = %.2f (target <= 2.0)\n", a.mean / b.mean);
+    std::printf("ratio (c)/(a) = %.2f (target >= 5)\n", c.mean / a.mean);
+    std::printf("agreement: max |visible/px_count_all| difference between (a) and (c) = %.4f\n",
+                max_fraction_difference);
+  }
+  if (arguments.jobs < 2) return;
+  compare_jobs(workload, arguments.jobs, "llvmpipe's default threading (what --jobs does)",
+               arguments.jobs == 2 ? " (target >= 1.7 for --jobs 2)" : "");
+  // llvmpipe reads LP_NUM_THREADS when a display is initialised; every display is terminated
+  // between runs and no other thread runs here, so setting it now is safe.
+  if (software && std::getenv("LP_NUM_THREADS") == nullptr) {
+    setenv("LP_NUM_THREADS", "0", 1);
+    compare_jobs(workload, arguments.jobs,
+                 "each context rasterising on its own thread (LP_NUM_THREADS=0): the scaling "
+                 "of workers alone",
+                 "");
+    unsetenv("LP_NUM_THREADS");
   }
 }
 
@@ -355,6 +398,8 @@ void add_bench_visibility_command(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   command->add_option("--seed", arguments->seed, "workload seed")->capture_default_str();
   command->add_flag("--per-image", arguments->per_image, "print each image's times as CSV");
+  command->add_flag("--throughput-only", arguments->throughput_only,
+                    "skip (a), (b) and (c): only the --jobs comparison");
   command->callback([arguments, exit_code] {
     run_bench(*arguments);
     *exit_code = 0;

@@ -2,6 +2,13 @@
 
 // Headless OpenGL through EGL: device platform first, surfaceless Mesa as fallback, desktop GL
 // core with version fallback. One context per worker thread.
+//
+// With the software renderer (Mesa llvmpipe), contexts on one EGL display share one llvmpipe
+// screen, which rasterises one scene at a time, so worker threads would wait for each other.
+// The automatically chosen software device and the surfaceless platform are two displays with
+// independent screens: each new context goes to the one holding fewer contexts (checked to be
+// the same software renderer). Mesa offers no third software display, so with more than two
+// workers contexts share screens.
 
 #include <memory>
 #include <stdexcept>
@@ -16,12 +23,13 @@ class RenderError : public std::runtime_error {
 };
 
 struct EglOptions {
-  // EGL device index to use; -1 picks a hardware device when one exists, else the software one.
+  // EGL device index to use; -1 picks a hardware device when one exists, else the software one
+  // (then spread over two software screens, see above).
   int device_index = -1;
 };
 
-// An EGL display + GL context made current on the creating thread. Move-only; the shared
-// display is never terminated (that would kill other threads' contexts).
+// An EGL display + GL context made current on the creating thread. Move-only; a shared display
+// is terminated only with its last context (earlier would kill other threads' contexts).
 class EglContext {
  public:
   static EglContext create(const EglOptions& options = {});  // throws RenderError
@@ -40,6 +48,7 @@ class EglContext {
  private:
   struct State;
   explicit EglContext(std::unique_ptr<State> state);
+  static EglContext create_on_display(int device_index, bool allow_second_screen);
   std::unique_ptr<State> state_;
 };
 
