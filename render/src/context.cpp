@@ -243,9 +243,9 @@ void release_display(const DisplayKey& key) {
   }
 }
 
-EGLDisplay display_of(const DisplayKey& key) {
+SharedDisplay display_of(const DisplayKey& key) {
   std::lock_guard<std::mutex> lock(display_mutex());
-  return displays()[key].display;
+  return displays()[key];
 }
 
 void refuse_second_screen() {
@@ -263,6 +263,7 @@ std::string gl_string(GLenum name) {
 struct EglContext::State {
   DisplayKey key;
   EGLDisplay display = EGL_NO_DISPLAY;
+  std::string display_description;
   EGLContext context = EGL_NO_CONTEXT;
   std::string renderer;
   std::string version;
@@ -311,7 +312,9 @@ EglContext EglContext::create(const EglOptions& options) {
 EglContext EglContext::create_on_display(int device_index, bool allow_second_screen) {
   auto state = std::make_unique<State>();
   state->key = acquire_display(device_index, allow_second_screen);
-  state->display = display_of(state->key);
+  const SharedDisplay shared = display_of(state->key);
+  state->display = shared.display;
+  state->display_description = shared.description;
   struct DisplayGuard {  // gives the display reference back if creation fails below
     State* state;
     ~DisplayGuard() {
@@ -385,6 +388,9 @@ void EglContext::make_current() const {
 
 std::string EglContext::renderer() const { return state_ ? state_->renderer : ""; }
 std::string EglContext::version() const { return state_ ? state_->version : ""; }
+std::string EglContext::display_description() const {
+  return state_ ? state_->display_description : "";
+}
 
 bool EglContext::is_software() const {
   const std::string& name = renderer();

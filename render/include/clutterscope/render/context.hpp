@@ -44,6 +44,9 @@ class EglContext {
   std::string renderer() const;  // GL_RENDERER
   std::string version() const;   // GL_VERSION
   bool is_software() const;      // llvmpipe / softpipe
+  // The EGL display the context lives on: "EGL device N", "surfaceless Mesa platform" or
+  // "surfaceless Mesa platform (second software screen)".
+  std::string display_description() const;
 
  private:
   struct State;
