@@ -24,10 +24,13 @@ class VisibilityGl : public ::testing::Test {
     if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
     context_.emplace(render::EglContext::create());
     renderer_ = std::make_unique<render::Renderer>(*context_);
+    bop_renderer_ = std::make_unique<render::BopDepthRenderer>(*context_);
   }
   void TearDown() override {
     meshes_.clear();
+    bop_models_.clear();
     renderer_.reset();
+    bop_renderer_.reset();
     context_.reset();
   }
 
@@ -44,16 +47,37 @@ class VisibilityGl : public ::testing::Test {
     return instances;
   }
 
+  // BOP modes: the boxes as millimetre models and poses, as a BOP dataset holds them.
+  std::vector<BopObject> upload_bop(const std::vector<RayBox>& boxes) {
+    std::vector<BopObject> objects;
+    for (const RayBox& box : boxes) {
+      render::Mesh mesh_mm = testing::box_mesh(box.size);
+      for (Eigen::Vector3f& p : mesh_mm.positions) p *= 1000.0f;
+      bop_models_.push_back(std::make_unique<render::BopModel>(render::BopModel::upload(mesh_mm)));
+      BopObject object;
+      object.model = bop_models_.back().get();
+      object.R = box.model_to_camera.linear();
+      object.t = box.model_to_camera.translation() * 1000.0;
+      objects.push_back(object);
+    }
+    return objects;
+  }
+
   ImageVisibility compute(const std::vector<RayBox>& boxes, const VisibilityOptions& options,
                           const cv::Mat& measured_mm = cv::Mat(), ImageMasks* masks = nullptr) {
-    return compute_image_visibility(*renderer_, camera_, upload(boxes), options, measured_mm,
-                                    "test: ", masks);
+    if (options.is_bop()) {
+      return compute_bop_image_visibility(*bop_renderer_, camera_, upload_bop(boxes), options,
+                                          measured_mm, "test: ", masks);
+    }
+    return compute_image_visibility(*renderer_, camera_, upload(boxes), options, "test: ", masks);
   }
 
   datasets::Camera camera_ = testing::test_camera(160, 120, 100.0);
   std::optional<render::EglContext> context_;
   std::unique_ptr<render::Renderer> renderer_;
+  std::unique_ptr<render::BopDepthRenderer> bop_renderer_;
   std::vector<std::unique_ptr<render::GpuMesh>> meshes_;
+  std::vector<std::unique_ptr<render::BopModel>> bop_models_;
 };
 
 // Three oriented boxes occluding each other.

@@ -178,7 +178,7 @@ double seconds_since(Clock::time_point start) {
 // (a) our visibility: Eq. 10 counts on the GPU, with BOP's 3x-canvas px_count_all.
 visibility::ImageVisibility ours(BenchContext& bench, const Workload& workload, std::size_t i) {
   return visibility::compute_image_visibility(bench.renderer, workload.camera,
-                                              bench.instances(workload, i), {}, cv::Mat(), "");
+                                              bench.instances(workload, i), {}, "");
 }
 
 // (c) bop_toolkit's calc_gt_info.py procedure with the rendered scene as the measured depth:

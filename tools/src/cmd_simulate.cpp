@@ -191,7 +191,7 @@ class Simulation {
     const std::vector<render::Instance> instances = render::scene_instances(current, models_);
     const std::string where = datasets::location(view_.key.scene_id, view_.key.im_id);
     const visibility::ImageVisibility seen = visibility::compute_image_visibility(
-        renderer_, current.camera, instances, visibility::VisibilityOptions{}, cv::Mat(), where);
+        renderer_, current.camera, instances, visibility::VisibilityOptions{}, where);
     const render::DepthLabelImage clean =
         renderer_.render(render::Intrinsics::from_camera(current.camera), instances);
     std::vector<std::array<std::uint8_t, 3>> label_colours = {{0, 0, 0}};

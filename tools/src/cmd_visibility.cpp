@@ -8,6 +8,7 @@
 #include <atomic>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/render/bop_renderer.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/mesh.hpp>
 #include <clutterscope/render/renderer.hpp>
@@ -117,7 +118,8 @@ class VisibilityWorker {
       : dataset_(dataset),
         arguments_(arguments),
         context_(render::EglContext::create()),
-        renderer_(context_) {
+        renderer_(context_),
+        bop_renderer_(context_) {
     options_.mode = *visibility::parse_visibility_mode(arguments.mode);
     options_.delta_mm = arguments.delta_mm;
     options_.pixel_center = arguments.pixel_center == "integer" ? render::PixelCenter::kInteger
@@ -137,21 +139,39 @@ class VisibilityWorker {
       measured_mm = visibility::load_bop_depth_mm(depth_path.string(), view.camera.depth_scale,
                                                   view.camera.width, view.camera.height, where);
     }
-    std::vector<render::Instance> instances;
     std::vector<std::string> labels;
-    for (std::size_t gt = 0; gt < view.objects.size(); ++gt) {
-      const datasets::GtInstance& object = view.objects[gt];
-      render::Instance instance;
-      instance.mesh = &mesh(object.obj_id, where + "gt " + std::to_string(gt) + ": ");
-      instance.model_to_camera = object.model_to_camera;
-      instances.push_back(instance);
+    for (const datasets::GtInstance& object : view.objects) {
       labels.push_back(dataset_.model(object.obj_id).label);
     }
     const bool want_masks = arguments_.masks || arguments_.overlays;
     visibility::ImageMasks masks;
-    const visibility::ImageVisibility result =
-        visibility::compute_image_visibility(renderer_, view.camera, instances, options_,
-                                             measured_mm, where, want_masks ? &masks : nullptr);
+    visibility::ImageMasks* masks_out = want_masks ? &masks : nullptr;
+    visibility::ImageVisibility result;
+    if (options_.is_bop()) {
+      std::vector<visibility::BopObject> objects;
+      for (std::size_t gt = 0; gt < view.objects.size(); ++gt) {
+        const datasets::GtInstance& object = view.objects[gt];
+        visibility::BopObject bop_object;
+        bop_object.model = &bop_model(object.obj_id, where + "gt " + std::to_string(gt) + ": ");
+        bop_object.R = object.model_to_camera.linear();
+        // Back to scene_gt.json's millimetres (the reader divided them by 1000).
+        bop_object.t = object.model_to_camera.translation() * 1000.0;
+        objects.push_back(bop_object);
+      }
+      result = visibility::compute_bop_image_visibility(bop_renderer_, view.camera, objects,
+                                                        options_, measured_mm, where, masks_out);
+    } else {
+      std::vector<render::Instance> instances;
+      for (std::size_t gt = 0; gt < view.objects.size(); ++gt) {
+        const datasets::GtInstance& object = view.objects[gt];
+        render::Instance instance;
+        instance.mesh = &mesh(object.obj_id, where + "gt " + std::to_string(gt) + ": ");
+        instance.model_to_camera = object.model_to_camera;
+        instances.push_back(instance);
+      }
+      result = visibility::compute_image_visibility(renderer_, view.camera, instances, options_,
+                                                    where, masks_out);
+    }
 
     ItemOutput output;
     std::string object_rows;
@@ -187,20 +207,32 @@ class VisibilityWorker {
   }
 
  private:
-  const render::GpuMesh& mesh(int obj_id, const std::string& where) {
-    auto found = meshes_.find(obj_id);
-    if (found != meshes_.end()) return *found->second;
+  render::Mesh load_model(int obj_id, const std::string& where, double scale_to_metres) const {
     const datasets::ModelInfo& model = dataset_.model(obj_id);
-    render::Mesh loaded;
     try {
-      loaded = render::load_mesh(model.mesh_path);
+      return render::load_mesh(model.mesh_path, {scale_to_metres});
     } catch (const datasets::DatasetError& error) {
       throw datasets::DatasetError(
           model.mesh_path,
           where + "model of obj_id " + std::to_string(obj_id) + " cannot be used: " + error.what());
     }
-    auto gpu = std::make_unique<render::GpuMesh>(render::GpuMesh::upload(loaded));
+  }
+
+  const render::GpuMesh& mesh(int obj_id, const std::string& where) {
+    auto found = meshes_.find(obj_id);
+    if (found != meshes_.end()) return *found->second;
+    auto gpu = std::make_unique<render::GpuMesh>(render::GpuMesh::upload(
+        load_model(obj_id, where, render::MeshLoadOptions{}.scale_to_metres)));
     return *meshes_.emplace(obj_id, std::move(gpu)).first->second;
+  }
+
+  // BOP modes render models in their file's millimetres, as bop_toolkit does.
+  const render::BopModel& bop_model(int obj_id, const std::string& where) {
+    auto found = bop_models_.find(obj_id);
+    if (found != bop_models_.end()) return *found->second;
+    auto gpu = std::make_unique<render::BopModel>(
+        render::BopModel::upload(load_model(obj_id, where, 1.0)));
+    return *bop_models_.emplace(obj_id, std::move(gpu)).first->second;
   }
 
   void write_file(const fs::path& relative, const std::string& bytes, ItemOutput* output) const {
@@ -259,7 +291,9 @@ class VisibilityWorker {
   const VisibilityArguments& arguments_;
   render::EglContext context_;
   render::Renderer renderer_;
+  render::BopDepthRenderer bop_renderer_;
   std::map<int, std::unique_ptr<render::GpuMesh>> meshes_;
+  std::map<int, std::unique_ptr<render::BopModel>> bop_models_;
   visibility::VisibilityOptions options_;
 };
 

@@ -102,33 +102,42 @@ void compute_rendered(render::Renderer& renderer, const render::Intrinsics& intr
   });
 }
 
-// bop_toolkit renders each object alone on the 3W x 3H canvas and crops the image out of it;
-// we do the same, restricted to each object's projected rectangle on that canvas.
-void compute_bop(render::Renderer& renderer, const render::Intrinsics& intrinsics,
-                 const datasets::Camera& camera, const std::vector<render::Instance>& instances,
-                 const VisibilityOptions& options, const cv::Mat& measured_depth_mm,
-                 ImageVisibility* result, ImageMasks* masks) {
-  const int width = intrinsics.width, height = intrinsics.height;
+// bop_toolkit renders each object alone on the 3W x 3H canvas with renderer_vispy and crops
+// the image out of it; BopDepthRenderer does the same with the same numbers, rasterising only
+// each object's projected rectangle on that canvas.
+void compute_bop(render::BopDepthRenderer& renderer, const datasets::Camera& camera,
+                 const std::vector<BopObject>& objects, const VisibilityOptions& options,
+                 const cv::Mat& measured_depth_mm, ImageVisibility* result, ImageMasks* masks) {
+  const int width = camera.width, height = camera.height;
   const BopCamera bop_camera{camera.fx(), camera.fy(), camera.cx(), camera.cy()};
   const BopVisibilityOptions bop_options{
       options.mode == VisibilityMode::kBop19 ? BopMode::kBop19 : BopMode::kBop18, options.delta_mm};
+  // calc_gt_info.py: cx + ren_cx_offset, cy + ren_cy_offset on a 3W x 3H renderer (plus half
+  // a pixel for cameras whose K projects to integer pixel centres).
+  const double shift = options.pixel_center == render::PixelCenter::kInteger ? 0.5 : 0.0;
+  const render::BopTarget canvas{
+      camera.fx(), camera.fy(), camera.cx() + width + shift, camera.cy() + height + shift,
+      3 * width,   3 * height};
   const cv::Rect image_on_canvas(width, height, width, height);
   // The measured distances once per image; per object, only its window is processed.
   const cv::Mat test_distance = visibility::depth_to_distance(measured_depth_mm, bop_camera);
-  renderer.render_each_alone(intrinsics.enlarged(3), instances, [&](const render::AloneView& view) {
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const BopObject& object = objects[i];
+    const cv::Rect rect =
+        render::BopDepthRenderer::projected_rect(*object.model, object.R, object.t, canvas);
+    const cv::Mat depth = renderer.render_object(*object.model, object.R, object.t, canvas, rect);
     CanvasSilhouette silhouette;
     cv::Rect window;  // image coordinates
     cv::Mat model_mm;
-    if (!view.rect.empty()) {
-      const cv::Mat mask = view.depth > 0;
+    if (!rect.empty()) {
+      const cv::Mat mask = depth > 0;
       silhouette.pixel_count = cv::countNonZero(mask);
       const cv::Rect box = bounding_rect_of(mask);
-      if (!box.empty()) silhouette.bbox = box + view.rect.tl() - image_on_canvas.tl();
-      const cv::Rect overlap = view.rect & image_on_canvas;
+      if (!box.empty()) silhouette.bbox = box + rect.tl() - image_on_canvas.tl();
+      const cv::Rect overlap = rect & image_on_canvas;
       if (!overlap.empty()) {
         window = overlap - image_on_canvas.tl();
-        // The BOP boundary: metres -> millimetres.
-        view.depth(overlap - view.rect.tl()).convertTo(model_mm, CV_32F, 1000.0);
+        model_mm = depth(overlap - rect.tl());
       }
     }
     if (window.empty()) {  // nothing in the image: a 1-pixel window of background
@@ -136,60 +145,105 @@ void compute_bop(render::Renderer& renderer, const render::Intrinsics& intrinsic
       model_mm = cv::Mat(1, 1, CV_32F, cv::Scalar(0));
     }
     cv::Mat visib;
-    ObjectVisibility& object = result->objects[view.index];
-    object.info = compute_bop_gt_info_in_window(model_mm, window, silhouette, test_distance,
-                                                bop_camera, bop_options, masks ? &visib : nullptr);
+    ObjectVisibility& result_object = result->objects[i];
+    result_object.info =
+        compute_bop_gt_info_in_window(model_mm, window, silhouette, test_distance, bop_camera,
+                                      bop_options, masks ? &visib : nullptr);
     // V^s in BOP modes: sum px_count_visib / sum px_count_all, the px_count_all-weighted
     // mean of visib_fract.
-    object.counts = {object.info.px_count_all, object.info.px_count_visib};
+    result_object.counts = {result_object.info.px_count_all, result_object.info.px_count_visib};
     if (masks) {
       cv::Mat silhouette_mask(height, width, CV_8U, cv::Scalar(0));
       cv::Mat visible_mask(height, width, CV_8U, cv::Scalar(0));
       silhouette_mask(window).setTo(255, model_mm > 0);
       visible_mask(window).setTo(255, visib);
-      masks->silhouette[view.index] = silhouette_mask;
-      masks->visible[view.index] = visible_mask;
+      masks->silhouette[i] = silhouette_mask;
+      masks->visible[i] = visible_mask;
     }
-  });
+  }
+}
+
+ImageVisibility finish(ImageVisibility result) {
+  std::vector<Eq10Counts> counts;
+  for (const ObjectVisibility& object : result.objects) counts.push_back(object.counts);
+  result.scene_visibility = scene_visibility(counts);
+  return result;
+}
+
+void prepare_masks(std::size_t objects, ImageMasks* masks) {
+  if (!masks) return;
+  masks->silhouette.assign(objects, cv::Mat());
+  masks->visible.assign(objects, cv::Mat());
 }
 
 }  // namespace
 
 ImageVisibility compute_image_visibility(render::Renderer& renderer, const datasets::Camera& camera,
                                          const std::vector<render::Instance>& objects,
-                                         const VisibilityOptions& options,
-                                         const cv::Mat& measured_depth_mm, const std::string& where,
+                                         const VisibilityOptions& options, const std::string& where,
                                          ImageMasks* masks) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument(why);
+  if (options.is_bop()) {
+    throw std::invalid_argument(
+        "compute_image_visibility computes the rendered mode; BOP modes need "
+        "compute_bop_image_visibility");
+  }
   const render::Intrinsics intrinsics =
       render::Intrinsics::from_camera(camera, options.pixel_center);
   check_in_front_of_camera(objects, intrinsics.near_m, where);
-  if (options.is_bop() &&
-      (measured_depth_mm.type() != CV_32F || measured_depth_mm.cols != camera.width ||
-       measured_depth_mm.rows != camera.height)) {
+  ImageVisibility result;
+  result.objects.resize(objects.size());
+  prepare_masks(objects.size(), masks);
+  if (objects.empty()) return result;
+  compute_rendered(renderer, intrinsics, labelled(objects), &result, masks);
+  return finish(std::move(result));
+}
+
+ImageVisibility compute_bop_image_visibility(render::BopDepthRenderer& renderer,
+                                             const datasets::Camera& camera,
+                                             const std::vector<BopObject>& objects,
+                                             const VisibilityOptions& options,
+                                             const cv::Mat& measured_depth_mm,
+                                             const std::string& where, ImageMasks* masks) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument(why);
+  if (!options.is_bop()) {
+    throw std::invalid_argument("compute_bop_image_visibility needs a BOP mode (bop19, bop18)");
+  }
+  const double near_mm = near_plane_m() * 1000.0;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const BopObject& object = objects[i];
+    if (object.model == nullptr) throw std::invalid_argument("BOP object without a model");
+    double nearest = std::numeric_limits<double>::infinity();
+    for (int c = 0; c < 8; ++c) {
+      const Eigen::Vector3d& min = object.model->bbox_min();
+      const Eigen::Vector3d& size = object.model->bbox_size();
+      const Eigen::Vector3d corner((c & 4) ? min.x() + size.x() : min.x(),
+                                   (c & 2) ? min.y() + size.y() : min.y(),
+                                   (c & 1) ? min.z() + size.z() : min.z());
+      nearest = std::min(nearest, (object.R * corner + object.t).z());
+    }
+    if (!(nearest > near_mm)) {
+      std::ostringstream message;
+      message << where << "gt " << i << ": the object reaches behind the camera (nearest "
+              << "bounding-box corner at z = " << nearest << " mm, must be beyond the near plane "
+              << "at " << near_mm << " mm); its visibility cannot be rendered";
+      throw datasets::DatasetError("", message.str());
+    }
+  }
+  if (measured_depth_mm.type() != CV_32F || measured_depth_mm.cols != camera.width ||
+      measured_depth_mm.rows != camera.height) {
     throw datasets::DatasetError("", where + "BOP visibility needs the measured depth (" +
                                          std::to_string(camera.width) + "x" +
                                          std::to_string(camera.height) + ", mm)");
   }
   ImageVisibility result;
   result.objects.resize(objects.size());
-  if (masks) {
-    masks->silhouette.assign(objects.size(), cv::Mat());
-    masks->visible.assign(objects.size(), cv::Mat());
-  }
+  prepare_masks(objects.size(), masks);
   if (objects.empty()) return result;
-  const std::vector<render::Instance> instances = labelled(objects);
-  if (options.is_bop()) {
-    compute_bop(renderer, intrinsics, camera, instances, options, measured_depth_mm, &result,
-                masks);
-  } else {
-    compute_rendered(renderer, intrinsics, instances, &result, masks);
-  }
-  std::vector<Eq10Counts> counts;
-  for (const ObjectVisibility& object : result.objects) counts.push_back(object.counts);
-  result.scene_visibility = scene_visibility(counts);
-  return result;
+  compute_bop(renderer, camera, objects, options, measured_depth_mm, &result, masks);
+  return finish(std::move(result));
 }
 
 }  // namespace clutterscope::visibility

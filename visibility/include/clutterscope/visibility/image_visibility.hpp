@@ -9,6 +9,7 @@
 // v_i and visib_fract is V_i.
 
 #include <clutterscope/datasets/scene.hpp>
+#include <clutterscope/render/bop_renderer.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <clutterscope/visibility/bop_visibility.hpp>
 #include <clutterscope/visibility/eq10.hpp>
@@ -51,20 +52,36 @@ struct ImageMasks {
   std::vector<cv::Mat> visible;
 };
 
-// `objects`: the GT instances in scene_gt order (their labels are ignored). Throws
-// datasets::DatasetError (message starting with `where`, e.g. "scene 1, image 3: ") when an
-// object reaches behind the camera's near plane (its counts would be silently wrong), or when
-// a BOP mode gets no measured depth of the camera's size. measured_depth_mm: the measured
-// depth as load_bop_depth_mm returns it (BOP modes only; ignored otherwise). With `masks`,
-// also fills the masks (costs extra renders and readbacks).
+// Rendered mode. `objects`: the GT instances in scene_gt order (their labels are ignored).
+// Throws datasets::DatasetError (message starting with `where`, e.g. "scene 1, image 3: ") when
+// an object reaches behind the camera's near plane (its counts would be silently wrong), and
+// std::invalid_argument for a BOP mode. With `masks`, also fills the masks (costs extra
+// renders and readbacks).
 ImageVisibility compute_image_visibility(render::Renderer& renderer, const datasets::Camera& camera,
                                          const std::vector<render::Instance>& objects,
-                                         const VisibilityOptions& options,
-                                         const cv::Mat& measured_depth_mm, const std::string& where,
+                                         const VisibilityOptions& options, const std::string& where,
                                          ImageMasks* masks = nullptr);
 
-// The renderer's near plane (metres) that compute_image_visibility requires objects to be
-// beyond.
+// One GT instance for the BOP modes: its model uploaded in the units of its file (BOP:
+// millimetres) and its pose as scene_gt.json gives it (cam_R_m2c, cam_t_m2c in the same units).
+struct BopObject {
+  const render::BopModel* model = nullptr;
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t = Eigen::Vector3d::Zero();
+};
+
+// BOP modes (bop19, bop18): calc_gt_info.py against the measured depth, each object rendered
+// alone by render::BopDepthRenderer with bop_toolkit's numbers. Throws as
+// compute_image_visibility does, and when the measured depth (load_bop_depth_mm) is missing or
+// not of the camera's size.
+ImageVisibility compute_bop_image_visibility(render::BopDepthRenderer& renderer,
+                                             const datasets::Camera& camera,
+                                             const std::vector<BopObject>& objects,
+                                             const VisibilityOptions& options,
+                                             const cv::Mat& measured_depth_mm,
+                                             const std::string& where, ImageMasks* masks = nullptr);
+
+// The renderer's near plane (metres) that both functions require objects to be beyond.
 double near_plane_m();
 
 }  // namespace clutterscope::visibility
