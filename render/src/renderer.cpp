@@ -105,6 +105,45 @@ void main() {
 }
 )";
 
+// Texels (RGBA32F) per tile in the tile buffer of render_tiles: model-view matrix (4 columns),
+// projection (4 columns), ray parameters, (tile origin, depth map), (label low and high 16 bits
+// as exact floats, 0, 0).
+constexpr int kTexelsPerTile = 11;
+
+// render_tiles draws a run of tiles of the same mesh as one instanced draw: instance i reads its
+// pose and projection from the tile buffer and, with viewport arrays, selects viewport and
+// scissor i, so each tile is rasterised exactly as a separate draw into its own viewport would
+// be. The arithmetic matches kVertexShader operation for operation.
+std::string tile_vertex_shader(bool viewport_array) {
+  return std::string("#version 330 core\n") +
+         (viewport_array ? "#extension GL_ARB_shader_viewport_layer_array : require\n" : "") +
+         R"(layout(location = 0) in vec3 position;
+uniform samplerBuffer tiles;
+uniform int first_tile;
+out float camera_z;
+flat out mat4 tile_model_view;
+flat out vec4 tile_ray;
+flat out vec4 tile_origin_depth_map;
+flat out uint tile_label;
+void main() {
+  int base = (first_tile + gl_InstanceID) * )" +
+         std::to_string(kTexelsPerTile) + R"(;
+  mat4 model_view = mat4(texelFetch(tiles, base), texelFetch(tiles, base + 1),
+                         texelFetch(tiles, base + 2), texelFetch(tiles, base + 3));
+  mat4 projection = mat4(texelFetch(tiles, base + 4), texelFetch(tiles, base + 5),
+                         texelFetch(tiles, base + 6), texelFetch(tiles, base + 7));
+  vec4 camera = model_view * vec4(position, 1.0);
+  camera_z = camera.z;
+  gl_Position = projection * camera;
+  tile_model_view = model_view;
+  tile_ray = texelFetch(tiles, base + 8);
+  tile_origin_depth_map = texelFetch(tiles, base + 9);
+  vec4 label = texelFetch(tiles, base + 10);
+  tile_label = uint(label.x) | (uint(label.y) << 16);
+)" + (viewport_array ? "  gl_ViewportIndex = gl_InstanceID;\n" : "") +
+         "}\n";
+}
+
 // DepthMode::kExactPerTile: depth is the exact intersection of the pixel's ray with the
 // triangle's plane, computed from the pixel position relative to its tile. Interpolated
 // attributes depend on the absolute framebuffer position (llvmpipe evaluates plane equations
@@ -112,15 +151,14 @@ void main() {
 // the same view rendered alone. The plane comes from a per-triangle buffer indexed by
 // gl_PrimitiveID, and the fragment depth is written from it so the depth test sees the same
 // value in every layout. It costs ~1.5-2x the interpolated shader on llvmpipe.
+// ray: window principal point (x, y) and focal lengths (fx, fy); tile_origin: window position
+// of the target's pixel (0, 0); depth_map: window depth = depth_map.x / Z + depth_map.y
+// (reversed).
 constexpr const char* kSurfaceDepth = R"(
 in float camera_z;
 #ifdef EXACT_DEPTH
 uniform samplerBuffer planes;     // model-frame plane (n, d) of each triangle: n.x = d
-uniform mat4 model_view;
-uniform vec4 ray;                 // window principal point (x, y) and focal lengths (fx, fy)
-uniform vec2 tile_origin;         // window position of the target's pixel (0, 0)
-uniform vec2 depth_map;           // window depth = depth_map.x / Z + depth_map.y (reversed)
-float surface_z() {
+float surface_z(mat4 model_view, vec4 ray, vec2 tile_origin, vec2 depth_map) {
   vec4 plane = texelFetch(planes, gl_PrimitiveID);
   vec3 n = mat3(model_view) * plane.xyz;
   float d = plane.w + dot(n, model_view[3].xyz);
@@ -133,20 +171,49 @@ float surface_z() {
   return z;
 }
 #else
-float surface_z() { return camera_z; }
+float surface_z(mat4 model_view, vec4 ray, vec2 tile_origin, vec2 depth_map) { return camera_z; }
 #endif
+)";
+
+// The per-draw parameters of surface_z as uniforms (render, count_visibility).
+constexpr const char* kSurfaceUniforms = R"(
+uniform mat4 model_view;
+uniform vec4 ray;
+uniform vec2 tile_origin;
+uniform vec2 depth_map;
+uniform uint label;
 )";
 
 std::string depth_label_fragment_shader(bool exact) {
   return std::string("#version 330 core\n") + (exact ? "#define EXACT_DEPTH 1\n" : "") + R"(
-uniform uint label;
 layout(location = 0) out float depth_out;
 layout(location = 1) out uint label_out;
+)" + kSurfaceUniforms +
+         kSurfaceDepth +
+         R"(
+void main() {
+  depth_out = surface_z(model_view, ray, tile_origin, depth_map);
+  label_out = label;
+}
+)";
+}
+
+// The fragment shader of render_tiles: the same as depth_label_fragment_shader with the
+// parameters passed per tile from tile_vertex_shader.
+std::string tile_fragment_shader(bool exact) {
+  return std::string("#version 330 core\n") + (exact ? "#define EXACT_DEPTH 1\n" : "") + R"(
+layout(location = 0) out float depth_out;
+layout(location = 1) out uint label_out;
+flat in mat4 tile_model_view;
+flat in vec4 tile_ray;
+flat in vec4 tile_origin_depth_map;
+flat in uint tile_label;
 )" + kSurfaceDepth +
          R"(
 void main() {
-  depth_out = surface_z();
-  label_out = label;
+  depth_out = surface_z(tile_model_view, tile_ray, tile_origin_depth_map.xy,
+                        tile_origin_depth_map.zw);
+  label_out = tile_label;
 }
 )";
 }
@@ -159,14 +226,14 @@ std::string coverage_fragment_shader(bool exact) {
 layout(binding = 0, r32ui) uniform uimage2DArray coverage;
 uniform int coverage_layer;
 uniform uint coverage_bit;
-uniform uint label;
 layout(location = 0) out float depth_out;
 layout(location = 1) out uint label_out;
-)" + kSurfaceDepth +
+)" + kSurfaceUniforms +
+         kSurfaceDepth +
          R"(
 void main() {
   imageAtomicOr(coverage, ivec3(ivec2(gl_FragCoord.xy), coverage_layer), coverage_bit);
-  depth_out = surface_z();
+  depth_out = surface_z(model_view, ray, tile_origin, depth_map);
   label_out = label;
 }
 )";
@@ -189,11 +256,11 @@ gl::Shader compile(GLenum type, const char* source) {
 struct Program {
   gl::Program program;
   GLint model_view = -1, projection = -1, label = -1, coverage_layer = -1, coverage_bit = -1;
-  GLint ray = -1, tile_origin = -1, depth_map = -1;
+  GLint ray = -1, tile_origin = -1, depth_map = -1, first_tile = -1;
 };
 
-Program link(const char* vertex_source, const std::string& fragment_source) {
-  const gl::Shader vertex = compile(GL_VERTEX_SHADER, vertex_source);
+Program link(const std::string& vertex_source, const std::string& fragment_source) {
+  const gl::Shader vertex = compile(GL_VERTEX_SHADER, vertex_source.c_str());
   const gl::Shader fragment = compile(GL_FRAGMENT_SHADER, fragment_source.c_str());
   Program result;
   result.program = gl::Program(glCreateProgram());
@@ -218,8 +285,10 @@ Program link(const char* vertex_source, const std::string& fragment_source) {
   result.ray = glGetUniformLocation(program, "ray");
   result.tile_origin = glGetUniformLocation(program, "tile_origin");
   result.depth_map = glGetUniformLocation(program, "depth_map");
+  result.first_tile = glGetUniformLocation(program, "first_tile");
   glUseProgram(program);
   glUniform1i(glGetUniformLocation(program, "planes"), 0);  // texture unit 0
+  glUniform1i(glGetUniformLocation(program, "tiles"), 1);   // texture unit 1
   glUseProgram(0);
   return result;
 }
@@ -246,18 +315,30 @@ bool has_gl_extension(const char* name) {
   return false;
 }
 
-// Shelf packing of tiles in request order into an atlas about as wide as it is high. Tile
-// origins sit on a 64-pixel grid: llvmpipe bins triangles into 64x64 framebuffer tiles, and a
-// tile straddling bin borders would have its triangles set up once per bin touched.
-constexpr int kTileAlignment = 64;
+// Shelf packing of tiles in request order into an atlas about as wide as it is high. llvmpipe
+// bins triangles into 64x64 framebuffer tiles, and a tile straddling bin borders would have its
+// triangles set up once per bin touched: tile origins sit on a grid of the smallest power of two
+// that holds the largest tile, up to 64, so a tile no larger than that grid lies within one bin
+// while small tiles (scoring grids of 32 pixels) still pack densely.
+constexpr int kBinSize = 64;
 
 // Triangles drawn into tiles between glFlush calls (see render_tiles).
 constexpr std::size_t kTrianglesPerFlush = 2048;
 
-int align_up(int value) { return (value + kTileAlignment - 1) / kTileAlignment * kTileAlignment; }
+int tile_alignment(const std::vector<cv::Size>& sizes) {
+  int largest = 1;
+  for (const auto& size : sizes) largest = std::max({largest, size.width, size.height});
+  int alignment = 1;
+  while (alignment < largest && alignment < kBinSize) alignment *= 2;
+  return alignment;
+}
 
 std::vector<cv::Rect> pack_tiles(const std::vector<cv::Size>& sizes, int max_size,
                                  cv::Size* atlas) {
+  const int alignment = tile_alignment(sizes);
+  const auto align_up = [alignment](int value) {
+    return (value + alignment - 1) / alignment * alignment;
+  };
   double area = 0;
   int widest = 1;
   for (const auto& size : sizes) {
@@ -384,8 +465,15 @@ struct Renderer::State {
   bool zero_to_one_clip = false;  // glClipControl available: reversed Z in [0, 1]
   bool coverage_supported = false;
   GLint max_size = 0;
+  // Tiles per instanced draw of render_tiles: GL_MAX_VIEWPORTS where the vertex shader can
+  // select the viewport, else 1 (one draw and viewport per tile).
+  int tiles_per_draw = 1;
   Program depth_label;
   Program coverage;
+  Program tiles;
+  gl::Buffer tile_buffer;  // kTexelsPerTile RGBA32F texels per tile, refilled per batch
+  gl::Texture tile_texture;
+  std::vector<Eigen::Vector4f> tile_texels;
 
   // The render target, grown on demand: R32F linear depth, R32UI labels, 32-bit float depth.
   gl::Framebuffer framebuffer;
@@ -470,7 +558,13 @@ struct Renderer::State {
     const Matrix4fColumnMajor model_view = instance.model_to_camera.matrix().cast<float>();
     glUniformMatrix4fv(program.model_view, 1, GL_FALSE, model_view.data());
     glUniform1ui(program.label, label);
-    const GpuMesh::State* mesh = instance.mesh->state_.get();
+    const GpuMesh::State& mesh = bind(*instance.mesh, bound_mesh);
+    glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT, nullptr);
+  }
+
+  // Binds the mesh's vertices and triangle planes unless `bound_mesh` is already it.
+  const GpuMesh::State& bind(const GpuMesh& gpu_mesh, const GpuMesh::State** bound_mesh) const {
+    const GpuMesh::State* mesh = gpu_mesh.state_.get();
     if (mesh != *bound_mesh) {
       if (exact_depth && !mesh->planes_texture) {
         throw RenderError("mesh of " + std::to_string(mesh->triangle_count) +
@@ -481,7 +575,7 @@ struct Renderer::State {
       glBindTexture(GL_TEXTURE_BUFFER, mesh->planes_texture.get());  // unit 0
       *bound_mesh = mesh;
     }
-    glDrawElements(GL_TRIANGLES, mesh->index_count, GL_UNSIGNED_INT, nullptr);
+    return *mesh;
   }
 
   cv::Mat read_labels(int x, int y, int width, int height) const {
@@ -489,6 +583,14 @@ struct Renderer::State {
     glReadBuffer(GL_COLOR_ATTACHMENT1);
     glReadPixels(x, y, width, height, GL_RED_INTEGER, GL_UNSIGNED_INT, labels.data);
     return labels;
+  }
+
+  cv::Mat read_depth(int x, int y, int width, int height) const {
+    cv::Mat depth(height, width, CV_32F);
+    glReadBuffer(GL_COLOR_ATTACHMENT0);
+    glReadPixels(x, y, width, height, GL_RED, GL_FLOAT, depth.data);
+    check_gl("readback");
+    return depth;
   }
 
   DepthLabelImage read(int x, int y, int width, int height) const {
@@ -533,6 +635,24 @@ Renderer::Renderer(const EglContext& context, const RendererOptions& options)
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   state_->exact_depth = options.depth == DepthMode::kExactPerTile;
   state_->depth_label = link(kVertexShader, depth_label_fragment_shader(state_->exact_depth));
+  const bool viewport_array = (version >= 41 || has_gl_extension("GL_ARB_viewport_array")) &&
+                              has_gl_extension("GL_ARB_shader_viewport_layer_array");
+  if (viewport_array) {
+    GLint viewports = 1;
+    glGetIntegerv(GL_MAX_VIEWPORTS, &viewports);
+    state_->tiles_per_draw = std::max(1, static_cast<int>(viewports));
+  }
+  state_->tiles = link(tile_vertex_shader(viewport_array && state_->tiles_per_draw > 1),
+                       tile_fragment_shader(state_->exact_depth));
+  state_->tile_buffer = gl::make_buffer();
+  state_->tile_texture = gl::make_texture();
+  glBindBuffer(GL_TEXTURE_BUFFER, state_->tile_buffer.get());
+  glBufferData(GL_TEXTURE_BUFFER, sizeof(Eigen::Vector4f) * kTexelsPerTile, nullptr,
+               GL_STREAM_DRAW);
+  glBindTexture(GL_TEXTURE_BUFFER, state_->tile_texture.get());
+  glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, state_->tile_buffer.get());
+  glBindTexture(GL_TEXTURE_BUFFER, 0);
+  glBindBuffer(GL_TEXTURE_BUFFER, 0);
   if (state_->coverage_supported) {
     state_->coverage = link(kVertexShader, coverage_fragment_shader(state_->exact_depth));
   }
@@ -558,7 +678,8 @@ DepthLabelImage Renderer::render(const Intrinsics& intrinsics,
   return state.read(0, 0, intrinsics.width, intrinsics.height);
 }
 
-TileAtlas Renderer::render_tiles(const std::vector<TileRequest>& requests) {
+TileAtlas Renderer::render_tiles(const std::vector<TileRequest>& requests,
+                                 const TileOptions& options) {
   std::vector<cv::Size> sizes;
   sizes.reserve(requests.size());
   for (std::size_t i = 0; i < requests.size(); ++i) {
@@ -572,27 +693,100 @@ TileAtlas Renderer::render_tiles(const std::vector<TileRequest>& requests) {
   cv::Size atlas_size;
   TileAtlas result;
   result.rects = pack_tiles(sizes, state.max_size, &atlas_size);
+
+  // Per-tile parameters as tile_vertex_shader reads them, with the values (and float
+  // roundings) that render() passes as uniforms.
+  state.tile_texels.resize(requests.size() * kTexelsPerTile);
+  for (std::size_t i = 0; i < requests.size(); ++i) {
+    const Intrinsics& k = requests[i].intrinsics;
+    const Matrix4fColumnMajor model_view =
+        requests[i].instance.model_to_camera.matrix().cast<float>();
+    const Matrix4fColumnMajor projection = projection_matrix(k, state.zero_to_one_clip);
+    Eigen::Vector4f* texels = &state.tile_texels[i * kTexelsPerTile];
+    for (int c = 0; c < 4; ++c) {
+      texels[c] = model_view.col(c);
+      texels[4 + c] = projection.col(c);
+    }
+    const double shift = pixel_shift(k.pixel_center), n = k.near_m, f = k.far_m;
+    texels[8] = Eigen::Vector4f(static_cast<float>(k.cx + shift), static_cast<float>(k.cy + shift),
+                                static_cast<float>(k.fx), static_cast<float>(k.fy));
+    texels[9] = Eigen::Vector4f(
+        static_cast<float>(result.rects[i].x), static_cast<float>(result.rects[i].y),
+        static_cast<float>(n * f / (f - n)), static_cast<float>(-n / (f - n)));
+    const std::uint32_t label = requests[i].instance.label;
+    texels[10] = Eigen::Vector4f(static_cast<float>(label & 0xffffu),
+                                 static_cast<float>(label >> 16), 0.0f, 0.0f);
+  }
+  // New storage per batch: the driver need not wait for draws still reading the last one.
+  glBindBuffer(GL_TEXTURE_BUFFER, state.tile_buffer.get());
+  glBufferData(GL_TEXTURE_BUFFER,
+               static_cast<GLsizeiptr>(state.tile_texels.size() * sizeof(Eigen::Vector4f)),
+               state.tile_texels.data(), GL_STREAM_DRAW);
+  glBindBuffer(GL_TEXTURE_BUFFER, 0);
+
   state.begin(atlas_size.width, atlas_size.height);
-  const Program& program = state.depth_label;
+  if (!options.labels) glColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  const Program& program = state.tiles;
   glUseProgram(program.program.get());
+  if (options.cull_back_faces) {
+    // Counter-clockwise (outward) triangles of the camera frame appear clockwise in the window:
+    // the projection flips y.
+    glEnable(GL_CULL_FACE);
+    glFrontFace(GL_CW);
+  }
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_BUFFER, state.tile_texture.get());
+  glActiveTexture(GL_TEXTURE0);
+  const std::size_t per_draw = static_cast<std::size_t>(state.tiles_per_draw);
+  std::vector<GLfloat> viewports(4 * per_draw);
+  std::vector<GLint> scissors(4 * per_draw);
   const GpuMesh::State* bound = nullptr;
   std::size_t triangles_since_flush = 0;
-  for (std::size_t i = 0; i < requests.size(); ++i) {
-    const cv::Rect& rect = result.rects[i];
-    glViewport(rect.x, rect.y, rect.width, rect.height);
-    glScissor(rect.x, rect.y, rect.width, rect.height);
-    state.set_projection(program, requests[i].intrinsics, rect.tl());
-    state.draw(program, requests[i].instance, requests[i].instance.label, &bound);
+  for (std::size_t first = 0; first < requests.size();) {
+    // A run of tiles of the same mesh, one viewport each, in one instanced draw.
+    const GpuMesh* mesh = requests[first].instance.mesh;
+    std::size_t count = 1;
+    while (count < per_draw && first + count < requests.size() &&
+           requests[first + count].instance.mesh == mesh) {
+      ++count;
+    }
+    if (per_draw > 1) {
+      for (std::size_t j = 0; j < count; ++j) {
+        const cv::Rect& rect = result.rects[first + j];
+        const int box[] = {rect.x, rect.y, rect.width, rect.height};
+        for (int c = 0; c < 4; ++c) {
+          viewports[4 * j + c] = static_cast<GLfloat>(box[c]);
+          scissors[4 * j + c] = box[c];
+        }
+      }
+      glViewportArrayv(0, static_cast<GLsizei>(count), viewports.data());
+      glScissorArrayv(0, static_cast<GLsizei>(count), scissors.data());
+    } else {
+      const cv::Rect& rect = result.rects[first];
+      glViewport(rect.x, rect.y, rect.width, rect.height);
+      glScissor(rect.x, rect.y, rect.width, rect.height);
+    }
+    glUniform1i(program.first_tile, static_cast<GLint>(first));
+    const GpuMesh::State& geometry = state.bind(*mesh, &bound);
+    glDrawElementsInstanced(GL_TRIANGLES, geometry.index_count, GL_UNSIGNED_INT, nullptr,
+                            static_cast<GLsizei>(count));
     // llvmpipe bins a whole frame before rasterising it: past a few MB of binned triangles the
     // bins fall out of cache and every triangle costs more. A flush hands the bins over to the
     // rasteriser threads without waiting for them.
-    triangles_since_flush += requests[i].instance.mesh->triangle_count();
+    triangles_since_flush += geometry.triangle_count * count;
     if (triangles_since_flush >= kTrianglesPerFlush) {
       glFlush();
       triangles_since_flush = 0;
     }
+    first += count;
   }
-  result.atlas = state.read(0, 0, atlas_size.width, atlas_size.height);
+  glDisable(GL_CULL_FACE);
+  if (options.labels) {
+    result.atlas = state.read(0, 0, atlas_size.width, atlas_size.height);
+  } else {
+    result.atlas.depth = state.read_depth(0, 0, atlas_size.width, atlas_size.height);
+    glColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  }
   return result;
 }
 

@@ -126,8 +126,10 @@ TEST_F(EstimateGl, TiledScoresMatchSingleRendersAndThePointSplatScorer) {
   scorer.score_one_by_one(gt.obj_id, gt.model_to_camera.linear(), translations, observation,
                           &single);
   ASSERT_TRUE(tiled.allFinite());
-  // Same rasterisation per tile; depths may differ in the last float bits only.
-  EXPECT_LT((tiled - single).cwiseAbs().maxCoeff(), 1e-4);
+  // Same rasterisation per tile; depths may differ in the last float bits only (interpolation
+  // at another framebuffer position, and back faces culled where they meet front faces): a few
+  // float ulps (<= 3e-7 m below 2 m, ray lengths ~1) per grid pixel at most.
+  EXPECT_LT((tiled - single).cwiseAbs().maxCoeff(), -cost.lambda * box.area() * 3e-7);
 
   // The scorer's cost equals estimator::pixel_cost (Eq. 6) on the same synthetic depth.
   for (int h = 0; h < 3; ++h) {

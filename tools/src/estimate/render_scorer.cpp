@@ -10,6 +10,9 @@ namespace clutterscope::tools {
 
 using Clock = std::chrono::steady_clock;
 
+// Eq. 6 compares depth only; the decimated proxies are closed, outward-wound meshes.
+const render::TileOptions kDepthOnly{false, true};
+
 render::Intrinsics scoring_grid_intrinsics(const estimator::BoxObservation& o) {
   const double s = o.stride;
   const Eigen::Matrix3d& k = o.camera_matrix;
@@ -93,7 +96,7 @@ void RenderHypothesisScorer::score(int obj_id, const Eigen::Matrix3d& rotation,
   log_likelihoods->resize(translations.cols());
   if (translations.cols() == 0) return;
   const Clock::time_point start = Clock::now();
-  const render::TileAtlas atlas = renderer_.render_tiles(requests_);
+  const render::TileAtlas atlas = renderer_.render_tiles(requests_, kDepthOnly);
   const Clock::time_point rendered = Clock::now();
   for (int h = 0; h < translations.cols(); ++h) {
     (*log_likelihoods)[h] =
@@ -112,13 +115,15 @@ void RenderHypothesisScorer::score_one_by_one(int obj_id, const Eigen::Matrix3d&
   const render::Intrinsics grid = scoring_grid_intrinsics(observation);
   const render::GpuMesh& mesh = models_.proxy(obj_id);
   log_likelihoods->resize(translations.cols());
+  // The same render path as score() with batches of one: only the batching differs.
+  std::vector<render::TileRequest> single(1);
+  single[0].intrinsics = grid;
+  single[0].instance.mesh = &mesh;
+  single[0].instance.model_to_camera.linear() = rotation;
   for (int h = 0; h < translations.cols(); ++h) {
-    render::Instance instance;
-    instance.mesh = &mesh;
-    instance.model_to_camera.linear() = rotation;
-    instance.model_to_camera.translation() = translations.col(h);
-    const render::DepthLabelImage image = renderer_.render(grid, {instance});
-    (*log_likelihoods)[h] = tile_log_likelihood(observation, image.depth);
+    single[0].instance.model_to_camera.translation() = translations.col(h);
+    const render::TileAtlas atlas = renderer_.render_tiles(single, kDepthOnly);
+    (*log_likelihoods)[h] = tile_log_likelihood(observation, atlas.depth(0));
   }
 }
 
