@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <clutterscope/render/renderer.hpp>
 #include <cmath>
 #include <cstdio>
@@ -378,6 +379,9 @@ struct GpuMesh::State {
   GLsizei index_count = 0;
   std::size_t triangle_count = 0;
   Eigen::AlignedBox3f bounds;
+  // CPU copies for back-face culling of whole runs of tiles (TileOptions::cull_back_faces).
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::vector<Eigen::Vector4d> triangle_planes;  // model-frame unit normal and offset
 };
 
 GpuMesh::GpuMesh() : state_(std::make_unique<State>()) {}
@@ -426,13 +430,8 @@ GpuMesh GpuMesh::upload(const Mesh& mesh) {
                mesh.triangles.data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
 
-  // Triangle planes for DepthMode::kExactPerTile, where the driver's texture buffers hold them.
-  GLint max_texels = 0;
-  glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
-  if (mesh.triangles.size() > static_cast<std::size_t>(max_texels)) {
-    check_gl("GpuMesh::upload");
-    return gpu;
-  }
+  state.triangles.assign(mesh.triangles.begin(), mesh.triangles.end());
+  state.triangle_planes.reserve(mesh.triangles.size());
   std::vector<Eigen::Vector4f> planes;
   planes.reserve(mesh.triangles.size());
   for (const auto& t : mesh.triangles) {
@@ -441,8 +440,17 @@ GpuMesh GpuMesh::upload(const Mesh& mesh) {
         (mesh.positions[t[1]].cast<double>() - a).cross(mesh.positions[t[2]].cast<double>() - a);
     const double length = normal.norm();
     const Eigen::Vector3d unit = length > 0 ? Eigen::Vector3d(normal / length) : normal;
+    state.triangle_planes.emplace_back(unit.x(), unit.y(), unit.z(), unit.dot(a));
     planes.emplace_back(static_cast<float>(unit.x()), static_cast<float>(unit.y()),
                         static_cast<float>(unit.z()), static_cast<float>(unit.dot(a)));
+  }
+
+  // Triangle planes for DepthMode::kExactPerTile, where the driver's texture buffers hold them.
+  GLint max_texels = 0;
+  glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
+  if (mesh.triangles.size() > static_cast<std::size_t>(max_texels)) {
+    check_gl("GpuMesh::upload");
+    return gpu;
   }
   state.planes = gl::make_buffer();
   glBindBuffer(GL_TEXTURE_BUFFER, state.planes.get());
@@ -474,6 +482,8 @@ struct Renderer::State {
   gl::Buffer tile_buffer;  // kTexelsPerTile RGBA32F texels per tile, refilled per batch
   gl::Texture tile_texture;
   std::vector<Eigen::Vector4f> tile_texels;
+  gl::Buffer tile_indices;  // triangles kept by back-face culling, refilled per batch
+  std::vector<std::uint32_t> kept_indices;
 
   // The render target, grown on demand: R32F linear depth, R32UI labels, 32-bit float depth.
   gl::Framebuffer framebuffer;
@@ -645,6 +655,7 @@ Renderer::Renderer(const EglContext& context, const RendererOptions& options)
   state_->tiles = link(tile_vertex_shader(viewport_array && state_->tiles_per_draw > 1),
                        tile_fragment_shader(state_->exact_depth));
   state_->tile_buffer = gl::make_buffer();
+  state_->tile_indices = gl::make_buffer();
   state_->tile_texture = gl::make_texture();
   glBindBuffer(GL_TEXTURE_BUFFER, state_->tile_buffer.get());
   glBufferData(GL_TEXTURE_BUFFER, sizeof(Eigen::Vector4f) * kTexelsPerTile, nullptr,
@@ -737,48 +748,104 @@ TileAtlas Renderer::render_tiles(const std::vector<TileRequest>& requests,
   glActiveTexture(GL_TEXTURE1);
   glBindTexture(GL_TEXTURE_BUFFER, state.tile_texture.get());
   glActiveTexture(GL_TEXTURE0);
+  // Runs of tiles of the same mesh, one viewport each, each run one instanced draw.
+  struct Run {
+    std::size_t first = 0, count = 0;
+    std::size_t first_index = 0, index_count = 0;  // into kept_indices when culling
+  };
   const std::size_t per_draw = static_cast<std::size_t>(state.tiles_per_draw);
+  std::vector<Run> runs;
+  state.kept_indices.clear();
+  // Exact depth looks triangle planes up by gl_PrimitiveID, which a shorter index list would
+  // renumber: there GL culls alone.
+  const bool cull_runs = options.cull_back_faces && !state.exact_depth;
+  for (std::size_t first = 0; first < requests.size();) {
+    const GpuMesh* mesh = requests[first].instance.mesh;
+    Run run{first, 1, 0, 0};
+    while (run.count < per_draw && first + run.count < requests.size() &&
+           requests[first + run.count].instance.mesh == mesh) {
+      ++run.count;
+    }
+    if (cull_runs) {
+      // The triangles facing the camera in at least one tile of the run (GL culls the rest per
+      // tile): back faces cost no vertex processing. Triangles within ~1 mrad of edge-on are
+      // kept, against rounding differences with the rasteriser's winding test.
+      const GpuMesh::State& geometry = *mesh->state_;
+      std::vector<Eigen::Vector4d> cameras;  // camera centre in the model frame, margin
+      for (std::size_t j = 0; j < run.count; ++j) {
+        const Eigen::Isometry3d& pose = requests[first + j].instance.model_to_camera;
+        const Eigen::Vector3d centre = -(pose.linear().transpose() * pose.translation());
+        cameras.emplace_back(centre.x(), centre.y(), centre.z(), 1e-3 * centre.norm());
+      }
+      run.first_index = state.kept_indices.size();
+      for (std::size_t t = 0; t < geometry.triangles.size(); ++t) {
+        const Eigen::Vector4d& plane = geometry.triangle_planes[t];
+        for (const Eigen::Vector4d& camera : cameras) {
+          if (plane.head<3>().dot(camera.head<3>()) - plane.w() > -camera.w()) {
+            state.kept_indices.insert(state.kept_indices.end(), geometry.triangles[t].begin(),
+                                      geometry.triangles[t].end());
+            break;
+          }
+        }
+      }
+      run.index_count = state.kept_indices.size() - run.first_index;
+    }
+    runs.push_back(run);
+    first += run.count;
+  }
+  if (cull_runs) {
+    glBindBuffer(GL_COPY_WRITE_BUFFER, state.tile_indices.get());
+    glBufferData(GL_COPY_WRITE_BUFFER,
+                 static_cast<GLsizeiptr>(state.kept_indices.size() * sizeof(std::uint32_t)),
+                 state.kept_indices.data(), GL_STREAM_DRAW);
+    glBindBuffer(GL_COPY_WRITE_BUFFER, 0);
+  }
+
   std::vector<GLfloat> viewports(4 * per_draw);
   std::vector<GLint> scissors(4 * per_draw);
   const GpuMesh::State* bound = nullptr;
   std::size_t triangles_since_flush = 0;
-  for (std::size_t first = 0; first < requests.size();) {
-    // A run of tiles of the same mesh, one viewport each, in one instanced draw.
-    const GpuMesh* mesh = requests[first].instance.mesh;
-    std::size_t count = 1;
-    while (count < per_draw && first + count < requests.size() &&
-           requests[first + count].instance.mesh == mesh) {
-      ++count;
-    }
+  for (const Run& run : runs) {
     if (per_draw > 1) {
-      for (std::size_t j = 0; j < count; ++j) {
-        const cv::Rect& rect = result.rects[first + j];
+      for (std::size_t j = 0; j < run.count; ++j) {
+        const cv::Rect& rect = result.rects[run.first + j];
         const int box[] = {rect.x, rect.y, rect.width, rect.height};
         for (int c = 0; c < 4; ++c) {
           viewports[4 * j + c] = static_cast<GLfloat>(box[c]);
           scissors[4 * j + c] = box[c];
         }
       }
-      glViewportArrayv(0, static_cast<GLsizei>(count), viewports.data());
-      glScissorArrayv(0, static_cast<GLsizei>(count), scissors.data());
+      glViewportArrayv(0, static_cast<GLsizei>(run.count), viewports.data());
+      glScissorArrayv(0, static_cast<GLsizei>(run.count), scissors.data());
     } else {
-      const cv::Rect& rect = result.rects[first];
+      const cv::Rect& rect = result.rects[run.first];
       glViewport(rect.x, rect.y, rect.width, rect.height);
       glScissor(rect.x, rect.y, rect.width, rect.height);
     }
-    glUniform1i(program.first_tile, static_cast<GLint>(first));
-    const GpuMesh::State& geometry = state.bind(*mesh, &bound);
-    glDrawElementsInstanced(GL_TRIANGLES, geometry.index_count, GL_UNSIGNED_INT, nullptr,
-                            static_cast<GLsizei>(count));
+    glUniform1i(program.first_tile, static_cast<GLint>(run.first));
+    const GpuMesh::State& geometry = state.bind(*requests[run.first].instance.mesh, &bound);
+    std::size_t triangles = geometry.triangle_count;
+    if (cull_runs) {
+      // The kept triangles through the vertex array's element binding, restored after the draw.
+      glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, state.tile_indices.get());
+      glDrawElementsInstanced(
+          GL_TRIANGLES, static_cast<GLsizei>(run.index_count), GL_UNSIGNED_INT,
+          reinterpret_cast<const void*>(run.first_index * sizeof(std::uint32_t)),
+          static_cast<GLsizei>(run.count));
+      glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, geometry.indices.get());
+      triangles = run.index_count / 3;
+    } else {
+      glDrawElementsInstanced(GL_TRIANGLES, geometry.index_count, GL_UNSIGNED_INT, nullptr,
+                              static_cast<GLsizei>(run.count));
+    }
     // llvmpipe bins a whole frame before rasterising it: past a few MB of binned triangles the
     // bins fall out of cache and every triangle costs more. A flush hands the bins over to the
     // rasteriser threads without waiting for them.
-    triangles_since_flush += geometry.triangle_count * count;
+    triangles_since_flush += triangles * run.count;
     if (triangles_since_flush >= kTrianglesPerFlush) {
       glFlush();
       triangles_since_flush = 0;
     }
-    first += count;
   }
   glDisable(GL_CULL_FACE);
   if (options.labels) {
