@@ -55,9 +55,7 @@ void RenderHypothesisScorer::prepare_grid(const estimator::BoxObservation& o) {
   }
 }
 
-double RenderHypothesisScorer::tile_log_likelihood(const estimator::BoxObservation& observation,
-                                                   const cv::Mat& tile_depth) {
-  prepare_grid(observation);
+double RenderHypothesisScorer::tile_log_likelihood(const cv::Mat& tile_depth) {
   const double truncation = options_.truncation;
   double total = 0;
   for (int r = 0; r < tile_depth.rows; ++r) {
@@ -98,9 +96,9 @@ void RenderHypothesisScorer::score(int obj_id, const Eigen::Matrix3d& rotation,
   const Clock::time_point start = Clock::now();
   const render::TileAtlas atlas = renderer_.render_tiles(requests_, kDepthOnly);
   const Clock::time_point rendered = Clock::now();
+  prepare_grid(observation);
   for (int h = 0; h < translations.cols(); ++h) {
-    (*log_likelihoods)[h] =
-        tile_log_likelihood(observation, atlas.depth(static_cast<std::size_t>(h)));
+    (*log_likelihoods)[h] = tile_log_likelihood(atlas.depth(static_cast<std::size_t>(h)));
   }
   render_seconds_ += std::chrono::duration<double>(rendered - start).count();
   cost_seconds_ += std::chrono::duration<double>(Clock::now() - rendered).count();
@@ -115,6 +113,7 @@ void RenderHypothesisScorer::score_one_by_one(int obj_id, const Eigen::Matrix3d&
   const render::Intrinsics grid = scoring_grid_intrinsics(observation);
   const render::GpuMesh& mesh = models_.proxy(obj_id);
   log_likelihoods->resize(translations.cols());
+  prepare_grid(observation);
   // The same render path as score() with batches of one: only the batching differs.
   std::vector<render::TileRequest> single(1);
   single[0].intrinsics = grid;
@@ -123,7 +122,7 @@ void RenderHypothesisScorer::score_one_by_one(int obj_id, const Eigen::Matrix3d&
   for (int h = 0; h < translations.cols(); ++h) {
     single[0].instance.model_to_camera.translation() = translations.col(h);
     const render::TileAtlas atlas = renderer_.render_tiles(single, kDepthOnly);
-    (*log_likelihoods)[h] = tile_log_likelihood(observation, atlas.depth(0));
+    (*log_likelihoods)[h] = tile_log_likelihood(atlas.depth(0));
   }
 }
 

@@ -39,8 +39,8 @@ class RenderHypothesisScorer : public estimator::HypothesisScorer {
   double cost_seconds() const { return cost_seconds_; }
 
  private:
-  double tile_log_likelihood(const estimator::BoxObservation& observation,
-                             const cv::Mat& tile_depth);
+  // Eq. 6 of one tile against the grid of the last prepare_grid.
+  double tile_log_likelihood(const cv::Mat& tile_depth);
   // Per grid pixel: observed depth and the length of the pixel's ray at unit depth, so that
   // |P_obs - P_syn| = |z_obs - z_syn| * ray_length (estimator::pixel_cost, without the
   // per-pixel back-projection).
