@@ -363,21 +363,14 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
       }
       for (std::size_t b = 0; b < own.size(); ++b)
         weighted.push_back({observations[b].get(), own[b].second});
-      // Half the object's depth along the view: half its camera-frame z extent.
+      // The model's box in the camera frame, for the offset from seen surface to centre.
       const datasets::ModelInfo& model = s.dataset.model(object.obj_id);
-      double z_min = std::numeric_limits<double>::infinity(), z_max = -z_min;
-      for (int corner = 0; corner < 8; ++corner) {
-        const Eigen::Vector3d offset(corner & 1 ? model.size.x() : 0,
-                                     corner & 2 ? model.size.y() : 0,
-                                     corner & 4 ? model.size.z() : 0);
-        const double z = (object.rotation * (model.min + offset)).z();
-        z_min = std::min(z_min, z);
-        z_max = std::max(z_max, z);
-      }
+      estimator::OrientedBox shape;
+      shape.rotation = object.rotation;
+      shape.half_size = 0.5 * model.size;
       try {
         initial[static_cast<std::size_t>(i)] = estimator::initial_mixture_from_boxes(
-            weighted, 0.5 * (z_max - z_min), camera_to_support, options.particles, min_variance,
-            rng);
+            weighted, shape, camera_to_support, options.particles, min_variance, rng);
         object.observation = observations[best];
         if (object.observation->valid_pixels() == 0)
           throw std::invalid_argument("the detection box has no depth on its scoring grid");
