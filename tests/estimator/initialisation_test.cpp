@@ -2,17 +2,56 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "estimator/scene_support.hpp"
 
 namespace clutterscope::estimator {
 namespace {
+
+// The oriented box of test box b in the camera frame.
+OrientedBox shape_of(const testing::TestScene& scene, int b) {
+  return {scene.support_to_camera.linear(), 0.5 * scene.boxes[b].size};
+}
+
+TEST(Initialisation, CentreToSurfaceIsTheDistanceToTheFirstFace) {
+  OrientedBox box;
+  box.half_size = Eigen::Vector3d(0.10, 0.08, 0.03);
+  EXPECT_NEAR(centre_to_surface(box, Eigen::Vector3d::UnitZ()), 0.03, 1e-12);
+  EXPECT_NEAR(centre_to_surface(box, -Eigen::Vector3d::UnitX()), 0.10, 1e-12);
+  // 60 degrees from the short axis: (0.03 / cos 60) = 0.06 < 0.10 / sin 60.
+  const double angle = M_PI / 3;
+  EXPECT_NEAR(centre_to_surface(box, Eigen::Vector3d(std::sin(angle), 0, std::cos(angle))), 0.06,
+              1e-12);
+  // Rotating the box and the direction together changes nothing.
+  box.rotation = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  EXPECT_NEAR(centre_to_surface(box, box.rotation * Eigen::Vector3d::UnitY()), 0.08, 1e-12);
+  box.half_size.x() = -1;
+  EXPECT_FALSE(box.IsValid(nullptr));
+}
+
+TEST(Initialisation, FlatBoxSeenObliquelyStartsNearItsCentre) {
+  // A 21 x 16 x 6 cm box alone on the table, seen 30 degrees down: its top face dominates the
+  // view. Half its extent in camera depth (about 10 cm) would put the start far behind it; the
+  // top face lies 3 cm above the centre. The detection box has a 15-pixel margin of table.
+  testing::TestScene scene = testing::make_stacked_scene();
+  scene.boxes.resize(2);
+  scene.boxes[1].size = Eigen::Vector3d(0.21, 0.16, 0.06);
+  scene.boxes[1].centre = Eigen::Vector3d(0.02, -0.03, 0.03);
+  testing::render(&scene);
+  const BoxObservation seen = testing::observe(scene, 1, 15, 1);
+  std::mt19937_64 rng(3);
+  const GaussianMixture init = initial_mixture_from_boxes(
+      {{&seen, 1.0}}, shape_of(scene, 1), scene.support_to_camera.inverse(), 400, 1e-8, rng);
+  EXPECT_LT((mixture_mean(init) - scene.boxes[1].centre).norm(), 0.01);
+}
 
 TEST(Initialisation, BoxSamplesLandNearTheObjectCentre) {
   const testing::TestScene scene = testing::make_stacked_scene();
   const BoxObservation top = testing::observe(scene, 2, 0, 1);
   std::mt19937_64 rng(12);
   const GaussianMixture init = initial_mixture_from_boxes(
-      {{&top, 1.0}}, 0.5 * 0.04, scene.support_to_camera.inverse(), 200, 1e-8, rng);
+      {{&top, 1.0}}, shape_of(scene, 2), scene.support_to_camera.inverse(), 200, 1e-8, rng);
   ASSERT_EQ(init.size(), 200);
   std::string why;
   ASSERT_TRUE(init.IsValid(&why)) << why;
@@ -28,8 +67,10 @@ TEST(Initialisation, BoxesWithoutDepthAreAClearError) {
   empty.height = 4;
   empty.depth.assign(16, 0.0f);
   std::mt19937_64 rng(1);
+  OrientedBox cube;
+  cube.half_size = Eigen::Vector3d::Constant(0.01);
   try {
-    initial_mixture_from_boxes({{&empty, 1.0}}, 0.01, Eigen::Isometry3d::Identity(), 10, 1e-8, rng);
+    initial_mixture_from_boxes({{&empty, 1.0}}, cube, Eigen::Isometry3d::Identity(), 10, 1e-8, rng);
     FAIL() << "expected an error";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("no depth"), std::string::npos) << e.what();
@@ -37,12 +78,13 @@ TEST(Initialisation, BoxesWithoutDepthAreAClearError) {
   // A second box with depth but zero confidence does not rescue it.
   BoxObservation full = empty;
   full.depth.assign(16, 1.0f);
-  EXPECT_THROW(initial_mixture_from_boxes({{&empty, 1.0}, {&full, 0.0}}, 0.01,
+  EXPECT_THROW(initial_mixture_from_boxes({{&empty, 1.0}, {&full, 0.0}}, cube,
                                           Eigen::Isometry3d::Identity(), 10, 1e-8, rng),
                std::invalid_argument);
-  // With confidence it is used: points at depth 1 + half depth along each ray.
+  // With confidence it is used: points at depth 1 + the cube's half size along each ray (the
+  // rays are within 5 degrees of the optical axis).
   const GaussianMixture g = initial_mixture_from_boxes(
-      {{&empty, 1.0}, {&full, 0.5}}, 0.01, Eigen::Isometry3d::Identity(), 10, 1e-8, rng);
+      {{&empty, 1.0}, {&full, 0.5}}, cube, Eigen::Isometry3d::Identity(), 10, 1e-8, rng);
   EXPECT_NEAR(mixture_mean(g).z(), 1.01, 0.001);
 }
 
