@@ -43,8 +43,8 @@ constexpr int kModeCandidates = 300;
 // The pixels of a box that see the object rather than the support, neighbours or background
 // around it in the box: the candidate centres of the object's own pixels fall inside its box
 // around one point, those of everything else scatter. Finds the densest such box over the
-// candidates (mode), re-centres it on the mean of the candidates inside (mean shift) and keeps
-// the pixels whose candidates fall inside.
+// candidates of the box's centre (mode), re-centres it on the mean of the candidates inside (mean
+// shift) and keeps the pixels whose candidates fall inside.
 std::vector<int> object_pixels(const BoxObservation& o, const OrientedBox& object,
                                const std::vector<int>& pixels) {
   const Eigen::Matrix3d k_inverse = o.camera_matrix.inverse();
@@ -52,22 +52,36 @@ std::vector<int> object_pixels(const BoxObservation& o, const OrientedBox& objec
   Eigen::Matrix3Xd local(3, n);  // candidates in the object's box axes
   for (int j = 0; j < n; ++j)
     local.col(j) = object.rotation.transpose() * candidate_centre(o, k_inverse, object, pixels[j]);
+  // The per-ray offset assumes the ray passes through the centre: a point seen off it (on the
+  // front face of a flat box seen obliquely, say) lands up to half a box further, so the
+  // window is 1.5 times the box.
+  const Eigen::Array3d window = 1.5 * object.half_size.array();
   auto inside = [&](int j, const Eigen::Vector3d& centre) {
-    return ((local.col(j) - centre).cwiseAbs().array() <= object.half_size.array()).all();
+    return ((local.col(j) - centre).cwiseAbs().array() <= window).all();
   };
-  const int step = std::max(1, (n + kModeCandidates - 1) / kModeCandidates);
+  // The mode is sought among the pixels of the central half of the box (in u and v): a
+  // detection box is centred on its object, the support and background show at its margins.
+  std::vector<int> central;
+  for (int j = 0; j < n; ++j) {
+    const int du = 4 * (pixels[j] % o.width) + 2 - 2 * o.width;
+    const int dv = 4 * (pixels[j] / o.width) + 2 - 2 * o.height;
+    if (std::abs(du) <= o.width && std::abs(dv) <= o.height) central.push_back(j);
+  }
+  if (central.empty()) return pixels;
+  const size_t step = std::max<size_t>(1, (central.size() + kModeCandidates - 1) / kModeCandidates);
   int best = 0, best_count = -1;
-  for (int a = 0; a < n; a += step) {
+  for (size_t a = 0; a < central.size(); a += step) {
     int count = 0;
-    for (int b = 0; b < n; b += step) count += inside(b, local.col(a)) ? 1 : 0;
+    for (size_t b = 0; b < central.size(); b += step)
+      count += inside(central[b], local.col(central[a])) ? 1 : 0;
     if (count > best_count) {
       best_count = count;
-      best = a;
+      best = central[a];
     }
   }
   Eigen::Vector3d centre = local.col(best);
   std::vector<int> kept;
-  for (int shift = 0; shift < 3; ++shift) {
+  for (int shift = 0; shift < 5; ++shift) {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     kept.clear();
     for (int j = 0; j < n; ++j)
