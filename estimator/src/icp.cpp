@@ -35,6 +35,8 @@ struct TranslationIcp::Tree {
     const int n = static_cast<int>(cloud.points.cols());
     const int k = std::min(n, 12);
     normal_outer.resize(n);
+    normals = Eigen::Matrix3Xd::Zero(3, n);
+    const Eigen::Vector3d centroid = cloud.points.rowwise().mean();
     std::vector<uint32_t> neighbours(k);
     std::vector<double> distances(k);
     for (int i = 0; i < n; ++i) {
@@ -52,14 +54,18 @@ struct TranslationIcp::Tree {
         normal_outer[i].setZero();
         continue;
       }
-      const Eigen::Vector3d normal =
+      Eigen::Vector3d normal =
           Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvectors().col(0);
+      // Outward for the (roughly convex) models: away from the centroid of the points.
+      if (normal.dot(cloud.points.col(i) - centroid) < 0) normal = -normal;
+      normals.col(i) = normal;
       normal_outer[i] = normal * normal.transpose();
     }
   }
   ColumnCloud cloud;
   KdTree index;
   std::vector<Eigen::Matrix3d> normal_outer;  // n n^T per model point
+  Eigen::Matrix3Xd normals;                   // outward unit normals, zero where unknown
 };
 
 bool IcpOptions::IsValid(std::string* why) const {
@@ -72,6 +78,8 @@ bool IcpOptions::IsValid(std::string* why) const {
     return fail("ICP max_correspondence_distance must be > 0");
   if (!(convergence_step > 0)) return fail("ICP convergence_step must be > 0");
   if (min_correspondences < 1) return fail("ICP min_correspondences must be >= 1");
+  if (!(min_normal_cosine >= 0 && min_normal_cosine <= 1))
+    return fail("ICP min_normal_cosine must be in [0, 1]");
   return true;
 }
 
@@ -88,8 +96,10 @@ TranslationIcp::~TranslationIcp() = default;
 TranslationIcp::TranslationIcp(TranslationIcp&&) noexcept = default;
 TranslationIcp& TranslationIcp::operator=(TranslationIcp&&) noexcept = default;
 
-IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed,
-                                const Eigen::Vector3d& initial) const {
+IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& initial,
+                                const Eigen::Matrix3Xd* observed_normals) const {
+  if (observed_normals && observed_normals->cols() != observed.cols())
+    throw std::invalid_argument("ICP needs one normal per observed point");
   IcpResult result;
   result.position = initial;
   const double max_sq = options_.max_correspondence_distance * options_.max_correspondence_distance;
@@ -108,6 +118,19 @@ IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed,
       double distance_sq = 0;
       if (tree_->index.knnSearch(query.data(), 1, &nearest, &distance_sq) == 0) continue;
       if (distance_sq > max_sq) continue;
+      const Eigen::Vector3d normal = tree_->normals.col(nearest);
+      // A model point facing away from the camera cannot be what the sensor saw: the table
+      // around a box matched to its hidden bottom, say, would drag it sideways.
+      if (options_.cull_back_faces &&
+          normal.dot(result.position + tree_->cloud.points.col(nearest)) > 0)
+        continue;
+      // Surfaces at an angle do not correspond: the floor next to a box is not its side.
+      if (observed_normals) {
+        const Eigen::Vector3d seen = observed_normals->col(i);
+        if (seen.squaredNorm() > 0 && normal.squaredNorm() > 0 &&
+            std::abs(seen.dot(normal)) < options_.min_normal_cosine)
+          continue;
+      }
       const Eigen::Matrix3d a =
           tree_->normal_outer[nearest] + kPointToPointWeight * Eigen::Matrix3d::Identity();
       normal_matrix += a;

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
@@ -107,22 +108,36 @@ std::shared_ptr<estimator::BoxObservation> box_observation(const cv::Mat& depth,
 }
 
 // Observed points (camera frame) of every pixel with depth in the box, at most `limit` (an
-// even subsample in raster order).
-Eigen::Matrix3Xd observed_points(const estimator::BoxObservation& o, int limit) {
+// even subsample in raster order), with their normals from the neighbouring pixels (zero where
+// a neighbour has no depth).
+std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> observed_points(const estimator::BoxObservation& o,
+                                                              int limit) {
   std::vector<int> valid;
   for (int i = 0; i < static_cast<int>(o.depth.size()); ++i)
     if (o.depth[static_cast<std::size_t>(i)] > 0) valid.push_back(i);
   const int step = std::max<int>(1, static_cast<int>((valid.size() + limit - 1) / limit));
   const Eigen::Matrix3d k_inv = o.camera_matrix.inverse();
-  Eigen::Matrix3Xd points(3, (valid.size() + step - 1) / step);
+  auto point = [&](int column, int row) -> std::optional<Eigen::Vector3d> {
+    if (column < 0 || row < 0 || column >= o.width || row >= o.height) return std::nullopt;
+    const double z = o.depth[static_cast<std::size_t>(row) * o.width + column];
+    if (!(z > 0)) return std::nullopt;
+    return k_inv * Eigen::Vector3d(o.x + column + 0.5, o.y + row + 0.5, 1) * z;
+  };
+  const std::size_t count = (valid.size() + step - 1) / step;
+  Eigen::Matrix3Xd points(3, count), normals = Eigen::Matrix3Xd::Zero(3, count);
   int n = 0;
-  for (std::size_t j = 0; j < valid.size(); j += step) {
-    const int i = valid[j];
-    const double z = o.depth[static_cast<std::size_t>(i)];
-    points.col(n++) =
-        k_inv * Eigen::Vector3d(o.x + i % o.width + 0.5, o.y + i / o.width + 0.5, 1) * z;
+  for (std::size_t j = 0; j < valid.size(); j += step, ++n) {
+    const int column = valid[j] % o.width, row = valid[j] / o.width;
+    points.col(n) = *point(column, row);
+    // Central differences, one-sided at the box's border or next to a pixel without depth.
+    const auto right = point(column + 1, row), left = point(column - 1, row);
+    const auto down = point(column, row + 1), up = point(column, row - 1);
+    const Eigen::Vector3d du = (right ? *right : points.col(n)) - (left ? *left : points.col(n));
+    const Eigen::Vector3d dv = (down ? *down : points.col(n)) - (up ? *up : points.col(n));
+    const Eigen::Vector3d normal = du.cross(dv);
+    if (normal.norm() > 0) normals.col(n) = normal.normalized();
   }
-  return points.leftCols(n);
+  return {points.leftCols(n), normals.leftCols(n)};
 }
 
 double box_iou(const cv::Rect& a, const cv::Rect& b) {
@@ -457,6 +472,7 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
   const double threshold_m2 = options.variance_threshold_cm2 * 1e-4;
   estimator::IcpOptions icp_options;
   icp_options.max_correspondence_distance = options.icp_max_distance_m;
+  icp_options.cull_back_faces = true;  // ICP runs in the camera frame
   for (ObjectEstimate& object : result.objects) {
     const int node = node_of[static_cast<std::size_t>(object.gt_id)];
     const Eigen::Vector3d truth = support_to_camera * position[object.gt_id];
@@ -471,13 +487,13 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
     const estimator::TranslationIcp icp(
         object.rotation * (s.model_points(object.obj_id).colwise() - object.model_centre),
         icp_options);
-    const Eigen::Matrix3Xd observed = observed_points(*object.observation, kIcpObservedPoints);
+    const auto [observed, normals] = observed_points(*object.observation, kIcpObservedPoints);
     const Eigen::MatrixXd starts = estimator::sample_mixture(belief, options.icp_samples, rng);
     std::vector<Eigen::Vector3d> fits;
     for (int k = 0; k < starts.cols(); ++k) {
       const Eigen::Vector3d start_camera = support_to_camera * Eigen::Vector3d(starts.col(k));
       // Fits in the support frame, so that variances are per support-frame axis.
-      fits.push_back(camera_to_support * icp.align(observed, start_camera).position);
+      fits.push_back(camera_to_support * icp.align(observed, start_camera, &normals).position);
     }
     estimator::FusedEstimate fused;
     try {

@@ -23,6 +23,12 @@ struct IcpOptions {
   double max_correspondence_distance = 0.02;  // metres
   double convergence_step = 1e-6;             // stop when the update is shorter (metres)
   int min_correspondences = 10;
+  // Observed points whose normal (when given) makes an angle with the model's normal whose
+  // cosine is below this are not matched: 0.7 is about 45 degrees, between the normals of
+  // the faces and of the blended edges of a box.
+  double min_normal_cosine = 0.7;
+  // Match only model points facing the camera, at the origin of the points' frame.
+  bool cull_back_faces = false;
   bool IsValid(std::string* why) const;
 };
 
@@ -48,7 +54,10 @@ class TranslationIcp {
 
   // Refines `initial` against the observed points (3 x K). Without enough correspondences the
   // result keeps the last position and converged = false.
-  IcpResult align(const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& initial) const;
+  // observed_normals (3 x K, unit or zero where unknown), when given, reject correspondences
+  // between surfaces at an angle (min_normal_cosine).
+  IcpResult align(const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& initial,
+                  const Eigen::Matrix3Xd* observed_normals = nullptr) const;
 
  private:
   struct Tree;
