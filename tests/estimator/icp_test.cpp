@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <tuple>
 
 namespace clutterscope::estimator {
 namespace {
@@ -100,6 +101,69 @@ TEST(Icp, FuseFitsEdgeCasesAndBadInput) {
   std::string why;
   EXPECT_FALSE(bad.IsValid(&why));
   EXPECT_NE(why.find("max_correspondence_distance"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace clutterscope::estimator
+
+namespace clutterscope::estimator {
+namespace {
+
+// A flat 21 x 16 x 6 cm box on a table seen obliquely from a camera at the origin: its top
+// face (normal -z, towards the camera), the -x and +y sides facing the camera, and the table
+// around it (the plane of its bottom face), with the observed normals.
+struct FlatBoxView {
+  Eigen::Vector3d size{0.21, 0.16, 0.06};
+  Eigen::Vector3d truth{0.25, -0.25, 0.8};
+  Eigen::Matrix3Xd points, normals;
+};
+
+FlatBoxView flat_box_view(std::mt19937_64& rng) {
+  FlatBoxView view;
+  std::uniform_real_distribution<double> u(-0.5, 0.5);
+  std::vector<Eigen::Vector3d> points, normals;
+  const Eigen::Vector3d half = 0.5 * view.size;
+  for (const auto& [axis, side, count] :
+       {std::tuple{2, -1, 1500}, std::tuple{0, -1, 150}, std::tuple{1, 1, 150}}) {
+    for (int i = 0; i < count; ++i) {
+      Eigen::Vector3d p(u(rng) * view.size.x(), u(rng) * view.size.y(), u(rng) * view.size.z());
+      p[axis] = side * half[axis];
+      points.push_back(view.truth + p);
+      normals.push_back(side * Eigen::Vector3d::Unit(axis));
+    }
+  }
+  for (int i = 0; i < 3000; ++i) {
+    const Eigen::Vector3d p(2 * u(rng) * 0.2, 2 * u(rng) * 0.2, half.z());
+    if (std::abs(p.x()) < half.x() && std::abs(p.y()) < half.y()) continue;
+    points.push_back(view.truth + p);
+    normals.push_back(-Eigen::Vector3d::UnitZ());
+  }
+  view.points.resize(3, points.size());
+  view.normals.resize(3, points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    view.points.col(i) = points[i];
+    view.normals.col(i) = normals[i];
+  }
+  return view;
+}
+
+TEST(Icp, FlatBoxSlidesBackWithBackFaceCullingAndNormalChecks) {
+  std::mt19937_64 rng(5);
+  const FlatBoxView view = flat_box_view(rng);
+  IcpOptions options;
+  options.max_correspondence_distance = 0.01;
+  options.cull_back_faces = true;
+  const TranslationIcp icp(box_surface(view.size, 3000, false, rng), options);
+  for (const Eigen::Vector3d& start :
+       {Eigen::Vector3d(0.008, 0, 0), Eigen::Vector3d(0, -0.008, 0.003),
+        Eigen::Vector3d(-0.006, 0.006, 0)}) {
+    const IcpResult fit = icp.align(view.points, view.truth + start, &view.normals);
+    EXPECT_LT((fit.position - view.truth).norm(), 0.001) << start.transpose();
+  }
+  const Eigen::Matrix3Xd too_few = view.normals.leftCols(3);
+  EXPECT_THROW(icp.align(view.points, view.truth, &too_few), std::invalid_argument);
+  options.min_normal_cosine = 1.5;
+  EXPECT_FALSE(options.IsValid(nullptr));
 }
 
 }  // namespace

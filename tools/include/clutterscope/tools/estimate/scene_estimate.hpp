@@ -49,7 +49,7 @@ struct EstimateOptions {
   // of reach): confident and wrong. Matching only camera-facing model points to observed
   // points of a like normal keeps the table and occluders from dragging the fits (with 2 cm
   // and neither check, fits of barely visible objects slid together onto occluders).
-  double icp_max_distance_m = 0.03;
+  double icp_max_distance_m = 0.01;
   double support_z_sigma_m = 0.003;
   double non_contact_floor = 1e-3;
   double min_bandwidth_m =
