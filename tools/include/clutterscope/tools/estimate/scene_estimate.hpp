@@ -44,11 +44,11 @@ struct EstimateOptions {
   double unary_truncation_m = 0.04;
   int grid_pixels = 32;
   int proxy_triangles = 200;  // decimated models for scoring (enough at a 32-px grid)
-  // ICP ignores observed points farther than this from the model. With 1 cm a flat box's fits
-  // stalled up to 3 cm sideways (its top face gives no sideways pull, the side faces were out
-  // of reach): confident and wrong. Matching only camera-facing model points to observed
-  // points of a like normal keeps the table and occluders from dragging the fits (with 2 cm
-  // and neither check, fits of barely visible objects slid together onto occluders).
+  // ICP ignores observed points farther than this from the model: short, so that each fit stays
+  // in the basin of its belief sample and the spread of the K fits reflects the belief's (with
+  // 2 cm, fits of barely visible objects slid together onto occluders: confident and wrong; with
+  // 3 cm, even with back-face culling and normal checks, the fits of cans slid together onto
+  // their neighbours, 2-3 cm off).
   double icp_max_distance_m = 0.01;
   double support_z_sigma_m = 0.003;
   double non_contact_floor = 1e-3;
