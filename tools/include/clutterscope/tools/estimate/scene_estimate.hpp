@@ -47,7 +47,7 @@ struct EstimateOptions {
   // ICP ignores observed points farther than this from the model: short, so that each fit stays
   // in the basin of its belief sample and the spread of the K fits reflects the belief's (with
   // 2 cm, fits of barely visible objects slid together onto occluders: confident and wrong; with
-  // 3 cm, even with back-face culling and normal checks, the fits of cans slid together onto
+  // 2 or 3 cm, even with back-face culling and normal checks, the fits of cans slid together onto
   // their neighbours, 2-3 cm off).
   double icp_max_distance_m = 0.01;
   double support_z_sigma_m = 0.003;
