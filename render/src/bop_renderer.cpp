@@ -7,6 +7,7 @@
 #include <string>
 
 #include "gl.hpp"
+#include "gl_program.hpp"
 
 namespace clutterscope::render {
 
@@ -26,27 +27,6 @@ void main() {
 constexpr const char* kFragmentShader = R"(#version 330 core
 void main() {}
 )";
-
-gl::Shader compile(GLenum type, const char* source) {
-  gl::Shader shader(glCreateShader(type));
-  glShaderSource(shader.get(), 1, &source, nullptr);
-  glCompileShader(shader.get());
-  GLint ok = GL_FALSE;
-  glGetShaderiv(shader.get(), GL_COMPILE_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    char log[2048] = {};
-    glGetShaderInfoLog(shader.get(), sizeof(log), nullptr, log);
-    throw RenderError(std::string("BOP depth shader compilation failed: ") + log);
-  }
-  return shader;
-}
-
-void check_gl(const char* what) {
-  const GLenum error = glGetError();
-  if (error != GL_NO_ERROR) {
-    throw RenderError(std::string(what) + ": GL error " + std::to_string(error));
-  }
-}
 
 using Matrix4 = std::array<std::array<double, 4>, 4>;
 
@@ -182,7 +162,7 @@ BopModel BopModel::upload(const Mesh& mesh) {
                static_cast<GLsizeiptr>(mesh.triangles.size() * sizeof(mesh.triangles[0])),
                mesh.triangles.data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
-  check_gl("BopModel::upload");
+  gl::check_error("BopModel::upload");
   return model;
 }
 
@@ -231,7 +211,7 @@ struct BopDepthRenderer::State {
     }
     width = target_width;
     height = target_height;
-    check_gl("BOP render target allocation");
+    gl::check_error("BOP render target allocation");
   }
 };
 
@@ -242,24 +222,10 @@ BopDepthRenderer::BopDepthRenderer(const EglContext& context) : state_(std::make
   glGetIntegerv(GL_MINOR_VERSION, &minor);
   state_->has_clip_control = major * 10 + minor >= 45;
   glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &state_->max_size);
-  const gl::Shader vertex = compile(GL_VERTEX_SHADER, kVertexShader);
-  const gl::Shader fragment = compile(GL_FRAGMENT_SHADER, kFragmentShader);
-  state_->program = gl::Program(glCreateProgram());
+  state_->program = gl::link_program(kVertexShader, kFragmentShader, "BOP depth renderer");
   const GLuint program = state_->program.get();
-  glAttachShader(program, vertex.get());
-  glAttachShader(program, fragment.get());
-  glLinkProgram(program);
-  GLint ok = GL_FALSE;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    char log[2048] = {};
-    glGetProgramInfoLog(program, sizeof(log), nullptr, log);
-    throw RenderError(std::string("BOP depth program link failed: ") + log);
-  }
-  glDetachShader(program, vertex.get());
-  glDetachShader(program, fragment.get());
   state_->mvp = glGetUniformLocation(program, "u_mvp");
-  check_gl("BopDepthRenderer setup");
+  gl::check_error("BopDepthRenderer setup");
 }
 
 BopDepthRenderer::BopDepthRenderer(BopDepthRenderer&&) noexcept = default;
@@ -344,7 +310,7 @@ cv::Mat BopDepthRenderer::render_object(const BopModel& model, const Eigen::Matr
   if (state.has_clip_control) {
     glClipControl(static_cast<GLenum>(clip_origin), static_cast<GLenum>(clip_depth));
   }
-  check_gl("BopDepthRenderer::render_object");
+  gl::check_error("BopDepthRenderer::render_object");
 
   // _draw_depth: rows flipped, then mult / (z + addi) on the float32 buffer with the float64
   // scalars rounded to float32 (NumPy's scalar casting), background (z == 1) set to 0.

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "gl.hpp"
+#include "gl_program.hpp"
 
 namespace clutterscope::render {
 
@@ -240,20 +241,6 @@ void main() {
 )";
 }
 
-gl::Shader compile(GLenum type, const char* source) {
-  gl::Shader shader(glCreateShader(type));
-  glShaderSource(shader.get(), 1, &source, nullptr);
-  glCompileShader(shader.get());
-  GLint ok = GL_FALSE;
-  glGetShaderiv(shader.get(), GL_COMPILE_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    char log[2048] = {};
-    glGetShaderInfoLog(shader.get(), sizeof(log), nullptr, log);
-    throw RenderError(std::string("shader compilation failed: ") + log);
-  }
-  return shader;
-}
-
 struct Program {
   gl::Program program;
   GLint model_view = -1, projection = -1, label = -1, coverage_layer = -1, coverage_bit = -1;
@@ -261,23 +248,9 @@ struct Program {
 };
 
 Program link(const std::string& vertex_source, const std::string& fragment_source) {
-  const gl::Shader vertex = compile(GL_VERTEX_SHADER, vertex_source.c_str());
-  const gl::Shader fragment = compile(GL_FRAGMENT_SHADER, fragment_source.c_str());
   Program result;
-  result.program = gl::Program(glCreateProgram());
+  result.program = gl::link_program(vertex_source.c_str(), fragment_source.c_str(), "renderer");
   const GLuint program = result.program.get();
-  glAttachShader(program, vertex.get());
-  glAttachShader(program, fragment.get());
-  glLinkProgram(program);
-  GLint ok = GL_FALSE;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (ok != GL_TRUE) {
-    char log[2048] = {};
-    glGetProgramInfoLog(program, sizeof(log), nullptr, log);
-    throw RenderError(std::string("shader program link failed: ") + log);
-  }
-  glDetachShader(program, vertex.get());
-  glDetachShader(program, fragment.get());
   result.model_view = glGetUniformLocation(program, "model_view");
   result.projection = glGetUniformLocation(program, "projection");
   result.label = glGetUniformLocation(program, "label");
@@ -292,17 +265,6 @@ Program link(const std::string& vertex_source, const std::string& fragment_sourc
   glUniform1i(glGetUniformLocation(program, "tiles"), 1);   // texture unit 1
   glUseProgram(0);
   return result;
-}
-
-void check_gl(const char* what) {
-  const GLenum error = glGetError();
-  if (error != GL_NO_ERROR) {
-    throw RenderError(std::string(what) + ": GL error 0x" + [&] {
-      char text[16];
-      std::snprintf(text, sizeof(text), "%x", error);
-      return std::string(text);
-    }());
-  }
 }
 
 bool has_gl_extension(const char* name) {
@@ -449,7 +411,7 @@ GpuMesh GpuMesh::upload(const Mesh& mesh) {
   GLint max_texels = 0;
   glGetIntegerv(GL_MAX_TEXTURE_BUFFER_SIZE, &max_texels);
   if (mesh.triangles.size() > static_cast<std::size_t>(max_texels)) {
-    check_gl("GpuMesh::upload");
+    gl::check_error("GpuMesh::upload");
     return gpu;
   }
   state.planes = gl::make_buffer();
@@ -461,7 +423,7 @@ GpuMesh GpuMesh::upload(const Mesh& mesh) {
   glTexBuffer(GL_TEXTURE_BUFFER, GL_RGBA32F, state.planes.get());
   glBindTexture(GL_TEXTURE_BUFFER, 0);
   glBindBuffer(GL_TEXTURE_BUFFER, 0);
-  check_gl("GpuMesh::upload");
+  gl::check_error("GpuMesh::upload");
   return gpu;
 }
 
@@ -526,7 +488,7 @@ struct Renderer::State {
     if (status != GL_FRAMEBUFFER_COMPLETE) {
       throw RenderError("framebuffer incomplete (status 0x" + std::to_string(status) + ")");
     }
-    check_gl("render target allocation");
+    gl::check_error("render target allocation");
   }
 
   // Binds the target and clears [0, width) x [0, height) to background.
@@ -599,7 +561,7 @@ struct Renderer::State {
     cv::Mat depth(height, width, CV_32F);
     glReadBuffer(GL_COLOR_ATTACHMENT0);
     glReadPixels(x, y, width, height, GL_RED, GL_FLOAT, depth.data);
-    check_gl("readback");
+    gl::check_error("readback");
     return depth;
   }
 
@@ -611,7 +573,7 @@ struct Renderer::State {
     glReadPixels(x, y, width, height, GL_RED, GL_FLOAT, image.depth.data);
     glReadBuffer(GL_COLOR_ATTACHMENT1);
     glReadPixels(x, y, width, height, GL_RED_INTEGER, GL_UNSIGNED_INT, image.labels.data);
-    check_gl("readback");
+    gl::check_error("readback");
     return image;
   }
 };
@@ -667,7 +629,7 @@ Renderer::Renderer(const EglContext& context, const RendererOptions& options)
   if (state_->coverage_supported) {
     state_->coverage = link(kVertexShader, coverage_fragment_shader(state_->exact_depth));
   }
-  check_gl("Renderer setup");
+  gl::check_error("Renderer setup");
 }
 
 Renderer::Renderer(Renderer&&) noexcept = default;
@@ -1041,7 +1003,7 @@ std::vector<InstanceCounts> Renderer::count_visibility(const Intrinsics& intrins
     glBindTexture(GL_TEXTURE_2D_ARRAY, state.coverage_image.get());
     glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_R32UI, state.coverage_width, state.coverage_height,
                    state.coverage_layers);
-    check_gl("coverage image allocation");
+    gl::check_error("coverage image allocation");
   }
   const GLuint zero = 0;
   glClearTexSubImage(state.coverage_image.get(), 0, 0, 0, 0, region.width, region.height, layers,
@@ -1067,7 +1029,7 @@ std::vector<InstanceCounts> Renderer::count_visibility(const Intrinsics& intrins
                        static_cast<GLsizei>(coverage.size() * sizeof(std::uint32_t)),
                        coverage.data());
   glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  check_gl("count_visibility");
+  gl::check_error("count_visibility");
   return count_from_masks(coverage, layers, region.size(), front_labels, image_in_region,
                           instances.size());
 }

@@ -1,0 +1,54 @@
+#include "gl_program.hpp"
+
+#include <clutterscope/render/context.hpp>
+#include <cstdio>
+#include <string>
+
+namespace clutterscope::render::gl {
+namespace {
+
+Shader compile(GLenum type, const char* source, const char* what) {
+  Shader shader(glCreateShader(type));
+  glShaderSource(shader.get(), 1, &source, nullptr);
+  glCompileShader(shader.get());
+  GLint ok = GL_FALSE;
+  glGetShaderiv(shader.get(), GL_COMPILE_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    char log[2048] = {};
+    glGetShaderInfoLog(shader.get(), sizeof(log), nullptr, log);
+    throw RenderError(std::string(what) + ": shader compilation failed: " + log);
+  }
+  return shader;
+}
+
+}  // namespace
+
+Program link_program(const char* vertex_source, const char* fragment_source, const char* what) {
+  const Shader vertex = compile(GL_VERTEX_SHADER, vertex_source, what);
+  const Shader fragment = compile(GL_FRAGMENT_SHADER, fragment_source, what);
+  Program program(glCreateProgram());
+  glAttachShader(program.get(), vertex.get());
+  glAttachShader(program.get(), fragment.get());
+  glLinkProgram(program.get());
+  GLint ok = GL_FALSE;
+  glGetProgramiv(program.get(), GL_LINK_STATUS, &ok);
+  if (ok != GL_TRUE) {
+    char log[2048] = {};
+    glGetProgramInfoLog(program.get(), sizeof(log), nullptr, log);
+    throw RenderError(std::string(what) + ": shader program link failed: " + log);
+  }
+  glDetachShader(program.get(), vertex.get());
+  glDetachShader(program.get(), fragment.get());
+  return program;
+}
+
+void check_error(const char* what) {
+  const GLenum error = glGetError();
+  if (error != GL_NO_ERROR) {
+    char code[16];
+    std::snprintf(code, sizeof(code), "%x", error);
+    throw RenderError(std::string(what) + ": GL error 0x" + code);
+  }
+}
+
+}  // namespace clutterscope::render::gl
