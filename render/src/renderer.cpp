@@ -4,8 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
 
 #include "gl.hpp"
 #include "gl_program.hpp"
@@ -344,6 +346,9 @@ struct GpuMesh::State {
   // CPU copies for back-face culling of whole runs of tiles (TileOptions::cull_back_faces).
   std::vector<std::array<std::uint32_t, 3>> triangles;
   std::vector<Eigen::Vector4d> triangle_planes;  // model-frame unit normal and offset
+  // +1: closed and wound outward (counter-clockwise seen from outside), -1: closed and wound
+  // inward, 0: open or inconsistent. Only closed meshes may skip their back faces.
+  int closed_orientation = 0;
 };
 
 GpuMesh::GpuMesh() : state_(std::make_unique<State>()) {}
@@ -352,6 +357,43 @@ GpuMesh& GpuMesh::operator=(GpuMesh&&) noexcept = default;
 GpuMesh::~GpuMesh() = default;
 std::size_t GpuMesh::triangle_count() const { return state_ ? state_->triangle_count : 0; }
 const Eigen::AlignedBox3f& GpuMesh::bounds() const { return state_->bounds; }
+
+namespace {
+
+// See GpuMesh::State::closed_orientation. Vertices are welded by exact position, since meshes
+// often duplicate vertices along seams of normals or texture coordinates; a mesh is closed when
+// every edge is used exactly once in each direction.
+int closed_orientation(const Mesh& mesh) {
+  std::map<std::array<float, 3>, std::uint32_t> ids;
+  std::vector<std::uint32_t> welded(mesh.positions.size());
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    const Eigen::Vector3f& p = mesh.positions[v];
+    welded[v] = ids.emplace(std::array<float, 3>{p.x(), p.y(), p.z()},
+                            static_cast<std::uint32_t>(ids.size()))
+                    .first->second;
+  }
+  std::unordered_map<std::uint64_t, int> directed_edges;
+  directed_edges.reserve(mesh.triangles.size() * 3);
+  double six_volume = 0;
+  for (const auto& t : mesh.triangles) {
+    const std::array<std::uint32_t, 3> w = {welded[t[0]], welded[t[1]], welded[t[2]]};
+    if (w[0] == w[1] || w[1] == w[2] || w[2] == w[0]) return 0;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint64_t key = (std::uint64_t{w[k]} << 32) | w[(k + 1) % 3];
+      if (++directed_edges[key] > 1) return 0;
+    }
+    six_volume += mesh.positions[t[0]].cast<double>().dot(
+        mesh.positions[t[1]].cast<double>().cross(mesh.positions[t[2]].cast<double>()));
+  }
+  for (const auto& [key, count] : directed_edges) {
+    const std::uint64_t reverse = (key << 32) | (key >> 32);
+    if (directed_edges.count(reverse) == 0) return 0;
+  }
+  if (six_volume == 0) return 0;
+  return six_volume > 0 ? 1 : -1;
+}
+
+}  // namespace
 
 GpuMesh GpuMesh::upload(const Mesh& mesh) {
   if (glGetString(GL_VERSION) == nullptr) {
@@ -392,6 +434,7 @@ GpuMesh GpuMesh::upload(const Mesh& mesh) {
                mesh.triangles.data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
 
+  state.closed_orientation = closed_orientation(mesh);
   state.triangles.assign(mesh.triangles.begin(), mesh.triangles.end());
   state.triangle_planes.reserve(mesh.triangles.size());
   std::vector<Eigen::Vector4f> planes;
@@ -1019,8 +1062,18 @@ std::vector<InstanceCounts> Renderer::count_visibility(const Intrinsics& intrins
   for (std::size_t i = 0; i < instances.size(); ++i) {
     glUniform1i(program.coverage_layer, static_cast<GLint>(i / 32));
     glUniform1ui(program.coverage_bit, 1u << (i % 32));
+    // A closed mesh's silhouette and front surface are its front faces: skipping the back
+    // faces halves the fragments this pass shades (it has no early depth test).
+    const int orientation = instances[i].mesh->state_->closed_orientation;
+    if (orientation != 0) {
+      glEnable(GL_CULL_FACE);
+      glFrontFace(orientation > 0 ? GL_CW : GL_CCW);  // the y-down projection flips winding
+    } else {
+      glDisable(GL_CULL_FACE);
+    }
     state.draw(program, instances[i], static_cast<std::uint32_t>(i + 1), &bound);
   }
+  glDisable(GL_CULL_FACE);
   glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
   const cv::Mat front_labels = state.read_labels(image_in_region.x, image_in_region.y,
                                                  image_in_region.width, image_in_region.height);

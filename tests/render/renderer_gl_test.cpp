@@ -462,6 +462,36 @@ TEST_F(RendererGl, CountVisibilityEqualsFullReadbacksOfEachObjectAlone) {
   EXPECT_GE(occluded, 5);
 }
 
+// count_visibility skips back faces only of closed meshes, whichever way they are wound: a box
+// wound inward counts like the box, and a box open towards the camera — whose inside (back
+// faces) fills its silhouette — still counts its whole outline.
+TEST_F(RendererGl, CountVisibilitySkipsBackFacesOnlyOfClosedMeshes) {
+  const Mesh box = box_mesh(Eigen::Vector3f(0.08f, 0.06f, 0.05f), 2);
+  Mesh inward = box;
+  for (auto& t : inward.triangles) std::swap(t[1], t[2]);
+  Mesh open = box;
+  open.triangles.clear();
+  for (const auto& t : box.triangles) {
+    const bool faces_camera = box.positions[t[0]].z() < -0.02f &&
+                              box.positions[t[1]].z() < -0.02f && box.positions[t[2]].z() < -0.02f;
+    if (!faces_camera) open.triangles.push_back(t);
+  }
+  ASSERT_LT(open.triangles.size(), box.triangles.size());
+  const GpuMesh closed_gpu = GpuMesh::upload(box), inward_gpu = GpuMesh::upload(inward),
+                open_gpu = GpuMesh::upload(open);
+  const Intrinsics k = camera_640x480();
+  const Eigen::Isometry3d at = pose(0.3, -0.4, 0.2, {0.01, -0.02, 0.6});
+  const InstanceCounts closed = renderer().count_visibility(k, {{&closed_gpu, at, 1}})[0];
+  const InstanceCounts wound_inward = renderer().count_visibility(k, {{&inward_gpu, at, 1}})[0];
+  const InstanceCounts opened = renderer().count_visibility(k, {{&open_gpu, at, 1}})[0];
+  ASSERT_GT(closed.silhouette_px, 1000);
+  EXPECT_EQ(wound_inward.silhouette_px, closed.silhouette_px);
+  EXPECT_EQ(wound_inward.visible_px, closed.visible_px);
+  EXPECT_EQ(opened.silhouette_px, closed.silhouette_px);
+  EXPECT_EQ(opened.visible_px, closed.visible_px);
+  EXPECT_EQ(opened.silhouette_bbox, closed.silhouette_bbox);
+}
+
 TEST_F(RendererGl, CountVisibilityOnTheBopCanvasCountsPartsOutsideTheImage) {
   const GpuMesh small = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.07f, 0.05f, 0.04f), 3));
   const GpuMesh wall = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.01f), 1));
