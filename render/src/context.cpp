@@ -2,6 +2,7 @@
 #include <EGL/eglext.h>
 
 #include <clutterscope/render/context.hpp>
+#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <mutex>
@@ -408,6 +409,16 @@ bool egl_available(std::string* why_not) {
     if (why_not != nullptr) *why_not = error.what();
     return false;
   }
+}
+
+WorkerRasterisationScope::WorkerRasterisationScope(int workers) {
+  if (workers >= 2 && std::getenv("LP_NUM_THREADS") == nullptr) {
+    set_ = ::setenv("LP_NUM_THREADS", "0", 1) == 0;
+  }
+}
+
+WorkerRasterisationScope::~WorkerRasterisationScope() {
+  if (set_) ::unsetenv("LP_NUM_THREADS");
 }
 
 }  // namespace clutterscope::render

@@ -2,6 +2,7 @@
 #include <atomic>
 #include <chrono>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/render/context.hpp>
 #include <clutterscope/tools/batch.hpp>
 #include <clutterscope/tools/formats.hpp>
 #include <cstdio>
@@ -236,11 +237,14 @@ BatchResult run_batch(const BatchJob& job, const BatchOptions& options) {
                     in_scope, result.resumed, style);
   const std::size_t thread_count =
       std::min<std::size_t>(static_cast<std::size_t>(options.jobs), queue.todo.size());
-  std::vector<std::thread> workers;
-  for (std::size_t t = 0; t < thread_count; ++t) {
-    workers.emplace_back([&] { run_worker(job, options, queue, progress); });
+  {
+    const render::WorkerRasterisationScope rasterisation(static_cast<int>(thread_count));
+    std::vector<std::thread> workers;
+    for (std::size_t t = 0; t < thread_count; ++t) {
+      workers.emplace_back([&] { run_worker(job, options, queue, progress); });
+    }
+    for (std::thread& worker : workers) worker.join();
   }
-  for (std::thread& worker : workers) worker.join();
 
   result.computed = std::min(queue.next.load(), queue.todo.size());
   result.failed = queue.failed;

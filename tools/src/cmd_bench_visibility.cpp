@@ -236,6 +236,7 @@ double process_cpu_seconds() {
 
 // Computes (a) for every image with `jobs` threads, each with its own context.
 ThroughputRun throughput_run(const Workload& workload, int jobs) {
+  const render::WorkerRasterisationScope rasterisation(jobs);  // as the batch runner does
   std::vector<std::unique_ptr<BenchContext>> contexts(static_cast<std::size_t>(jobs));
   std::atomic<std::size_t> next{0};
   std::atomic<int> ready{0};
@@ -362,7 +363,9 @@ void run_bench(const BenchArguments& arguments) {
                 max_fraction_difference);
   }
   if (arguments.jobs < 2) return;
-  compare_jobs(workload, arguments.jobs, "llvmpipe's default threading (what --jobs does)",
+  compare_jobs(workload, arguments.jobs,
+               "as the batch runner does it (--jobs 1: llvmpipe's rasteriser threads; --jobs N >= "
+               "2: LP_NUM_THREADS=0)",
                arguments.jobs == 2 ? " (target >= 1.7 for --jobs 2)" : "");
   // llvmpipe reads LP_NUM_THREADS when a display is initialised; every display is terminated
   // between runs and no other thread runs here, so setting it now is safe.

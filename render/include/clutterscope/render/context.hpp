@@ -55,6 +55,22 @@ class EglContext {
   std::unique_ptr<State> state_;
 };
 
+// While alive with `workers` >= 2 and LP_NUM_THREADS unset, sets LP_NUM_THREADS=0: every core
+// already runs a worker, so llvmpipe's own rasteriser threads would only add synchronisation
+// (measured: 16.5 against 21 ms CPU per visibility image). llvmpipe reads the variable when a
+// display is initialised, so create the scope before the workers' contexts and while no other
+// thread runs. No effect on hardware drivers.
+class WorkerRasterisationScope {
+ public:
+  explicit WorkerRasterisationScope(int workers);
+  ~WorkerRasterisationScope();
+  WorkerRasterisationScope(const WorkerRasterisationScope&) = delete;
+  WorkerRasterisationScope& operator=(const WorkerRasterisationScope&) = delete;
+
+ private:
+  bool set_ = false;
+};
+
 // True when an EGL display can be opened at all (tests skip with a message when not).
 bool egl_available(std::string* why_not = nullptr);
 
