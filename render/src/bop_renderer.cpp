@@ -118,23 +118,7 @@ const Eigen::Vector3d& BopModel::bbox_min() const { return state_->bbox_min; }
 const Eigen::Vector3d& BopModel::bbox_size() const { return state_->bbox_size; }
 
 BopModel BopModel::upload(const Mesh& mesh) {
-  if (glGetString(GL_VERSION) == nullptr) {
-    throw RenderError("BopModel::upload needs a current GL context (create an EglContext)");
-  }
-  if (mesh.triangles.empty())
-    throw std::invalid_argument("BopModel::upload: mesh has no triangles");
-  if (mesh.triangles.size() * 3 > static_cast<std::size_t>(std::numeric_limits<GLsizei>::max())) {
-    throw std::invalid_argument("BopModel::upload: mesh too large");
-  }
-  for (const auto& triangle : mesh.triangles) {
-    for (const auto index : triangle) {
-      if (index >= mesh.positions.size()) {
-        throw std::invalid_argument("BopModel::upload: triangle index " + std::to_string(index) +
-                                    " out of range (" + std::to_string(mesh.positions.size()) +
-                                    " vertices)");
-      }
-    }
-  }
+  gl::check_uploadable(mesh, "BopModel::upload");
   BopModel model;
   State& state = *model.state_;
   // misc.calc_3d_bbox in float64: min and max - min.

@@ -2,6 +2,8 @@
 
 #include <clutterscope/render/context.hpp>
 #include <cstdio>
+#include <limits>
+#include <stdexcept>
 #include <string>
 
 namespace clutterscope::render::gl {
@@ -48,6 +50,26 @@ void check_error(const char* what) {
     char code[16];
     std::snprintf(code, sizeof(code), "%x", error);
     throw RenderError(std::string(what) + ": GL error 0x" + code);
+  }
+}
+
+void check_uploadable(const Mesh& mesh, const char* who) {
+  const std::string name(who);
+  if (glGetString(GL_VERSION) == nullptr) {
+    throw RenderError(name + " needs a current GL context (create an EglContext)");
+  }
+  if (mesh.triangles.empty()) throw std::invalid_argument(name + ": mesh has no triangles");
+  if (mesh.triangles.size() * 3 > static_cast<std::size_t>(std::numeric_limits<GLsizei>::max())) {
+    throw std::invalid_argument(name + ": mesh too large");
+  }
+  for (const auto& triangle : mesh.triangles) {
+    for (const auto index : triangle) {
+      if (index >= mesh.positions.size()) {
+        throw std::invalid_argument(name + ": triangle index " + std::to_string(index) +
+                                    " out of range (" + std::to_string(mesh.positions.size()) +
+                                    " vertices)");
+      }
+    }
   }
 }
 

@@ -2,9 +2,15 @@
 
 // Private: shader programs and GL error checks shared by the renderers.
 
+#include <clutterscope/render/mesh.hpp>
+
 #include "gl.hpp"
 
 namespace clutterscope::render::gl {
+
+// Throws RenderError without a current GL context, std::invalid_argument for a mesh without
+// triangles, too large for one draw, or with an index out of range; `who` names the caller.
+void check_uploadable(const Mesh& mesh, const char* who);
 
 // Compiles and links a vertex + fragment program. Throws RenderError with `what` and the
 // driver's log when either step fails.

@@ -396,22 +396,7 @@ int closed_orientation(const Mesh& mesh) {
 }  // namespace
 
 GpuMesh GpuMesh::upload(const Mesh& mesh) {
-  if (glGetString(GL_VERSION) == nullptr) {
-    throw RenderError("GpuMesh::upload needs a current GL context (create an EglContext)");
-  }
-  if (mesh.triangles.empty()) throw std::invalid_argument("GpuMesh::upload: mesh has no triangles");
-  if (mesh.triangles.size() * 3 > static_cast<std::size_t>(std::numeric_limits<GLsizei>::max())) {
-    throw std::invalid_argument("GpuMesh::upload: mesh too large");
-  }
-  for (const auto& t : mesh.triangles) {
-    for (const auto index : t) {
-      if (index >= mesh.positions.size()) {
-        throw std::invalid_argument("GpuMesh::upload: triangle index " + std::to_string(index) +
-                                    " out of range (" + std::to_string(mesh.positions.size()) +
-                                    " vertices)");
-      }
-    }
-  }
+  gl::check_uploadable(mesh, "GpuMesh::upload");
   GpuMesh gpu;
   State& state = *gpu.state_;
   state.bounds = mesh.bounds();
