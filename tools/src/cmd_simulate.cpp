@@ -264,7 +264,7 @@ class Simulation {
     const std::string title = "round " + std::to_string(record.round) + ": " +
                               std::to_string(record.objects.size()) + " objects on the tray, " +
                               std::to_string(record.picks) + " picked, " +
-                              std::to_string(record.failed_picks) + " failed picks";
+                              std::to_string(record.failed_picks) + " failed";
     return svg::image_panels(title, svg::BackgroundImage::from_raster(view.shaded), panels, 480);
   }
 
@@ -345,7 +345,7 @@ std::string describe(const simulation::UnloadingResult& result, double threshold
   std::ostringstream out;
   out << "threshold " << threshold_text(threshold)
       << " cm^2: " << simulation::to_string(result.stop) << " after " << result.rounds.size()
-      << " round(s), " << result.picks << " picks, " << result.failed_picks << " failed picks, "
+      << " round(s), " << result.picks << " pick(s), " << result.failed_picks << " failed, "
       << result.left.size() << " object(s) left\n";
   for (const simulation::RoundRecord& record : result.rounds) {
     out << "  round " << record.round << ": " << record.objects.size() << " on the tray, "
