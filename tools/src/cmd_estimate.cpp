@@ -320,6 +320,16 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
 
 }  // namespace
 
+void add_nbp_options(CLI::App& command, EstimateOptions& options) {
+  command.add_option("--particles", options.particles, "M, Gaussian components per message")
+      ->capture_default_str();
+  command.add_option("--iterations", options.iterations, "NBP iterations")->capture_default_str();
+  command.add_option("--gibbs-sweeps", options.gibbs_sweeps, "Gibbs sweeps per product (kappa)")
+      ->capture_default_str();
+  command.add_option("--icp-samples", options.icp_samples, "K belief samples refined by ICP")
+      ->capture_default_str();
+}
+
 void add_estimate_command(CLI::App& app, int* exit_code) {
   register_batch_output(estimate_output_spec());
   auto arguments = std::make_shared<EstimateArguments>();
@@ -332,13 +342,7 @@ void add_estimate_command(CLI::App& app, int* exit_code) {
       "beliefs/SPLIT/SCENE/IMID.csv.");
   add_dataset_options(*command, &arguments->dataset);
   EstimateOptions& e = arguments->estimate;
-  command->add_option("--particles", e.particles, "M, Gaussian components per message")
-      ->capture_default_str();
-  command->add_option("--iterations", e.iterations, "NBP iterations")->capture_default_str();
-  command->add_option("--gibbs-sweeps", e.gibbs_sweeps, "Gibbs sweeps per product (kappa)")
-      ->capture_default_str();
-  command->add_option("--icp-samples", e.icp_samples, "K belief samples refined by ICP")
-      ->capture_default_str();
+  add_nbp_options(*command, e);
   command
       ->add_option("--variance-threshold-cm2", e.variance_threshold_cm2,
                    "confident iff every axis variance of the fused fits is <= this (cm^2, > 0)")

@@ -454,13 +454,7 @@ void add_simulate_command(CLI::App& app, int* exit_code) {
       "--variance-threshold-cm2) into OUT/threshold_T/ and tabulate them in "
       "OUT/compare.csv");
   EstimateOptions& e = arguments->estimate;
-  command->add_option("--particles", e.particles, "M, Gaussian components per message")
-      ->capture_default_str();
-  command->add_option("--iterations", e.iterations, "NBP iterations")->capture_default_str();
-  command->add_option("--gibbs-sweeps", e.gibbs_sweeps, "Gibbs sweeps per product (kappa)")
-      ->capture_default_str();
-  command->add_option("--icp-samples", e.icp_samples, "K belief samples refined by ICP")
-      ->capture_default_str();
+  add_nbp_options(*command, e);
   command->add_option("--seed", e.seed, "random seed (one stream per round)")
       ->capture_default_str();
   command->add_flag("--quiet", arguments->quiet, "print nothing on success");

@@ -11,6 +11,10 @@ namespace clutterscope::tools {
 // The `bench` command group, created by whichever benchmark registers first.
 CLI::App& bench_command_group(CLI::App& app);
 
+struct EstimateOptions;
+// --particles, --iterations, --gibbs-sweeps and --icp-samples, for every command that estimates.
+void add_nbp_options(CLI::App& command, EstimateOptions& options);
+
 void add_render_command(CLI::App& app, int* exit_code);
 void add_merge_command(CLI::App& app, int* exit_code);
 void add_visibility_command(CLI::App& app, int* exit_code);
