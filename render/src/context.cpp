@@ -411,8 +411,8 @@ bool egl_available(std::string* why_not) {
   }
 }
 
-WorkerRasterisationScope::WorkerRasterisationScope(int workers) {
-  if (workers >= 2 && std::getenv("LP_NUM_THREADS") == nullptr) {
+WorkerRasterisationScope::WorkerRasterisationScope() {
+  if (std::getenv("LP_NUM_THREADS") == nullptr) {
     set_ = ::setenv("LP_NUM_THREADS", "0", 1) == 0;
   }
 }

@@ -9,14 +9,10 @@ namespace {
 
 const char* lp_threads() { return std::getenv("LP_NUM_THREADS"); }
 
-TEST(WorkerRasterisationScope, SetsSingleThreadedRasterisationOnlyForSeveralWorkers) {
+TEST(WorkerRasterisationScope, SetsRasterisationOnTheWorkersOwnThreadsWhileAlive) {
   ::unsetenv("LP_NUM_THREADS");
   {
-    const WorkerRasterisationScope one(1);
-    EXPECT_EQ(lp_threads(), nullptr);
-  }
-  {
-    const WorkerRasterisationScope two(2);
+    const WorkerRasterisationScope scope;
     ASSERT_NE(lp_threads(), nullptr);
     EXPECT_EQ(std::string(lp_threads()), "0");
   }
@@ -26,7 +22,7 @@ TEST(WorkerRasterisationScope, SetsSingleThreadedRasterisationOnlyForSeveralWork
 TEST(WorkerRasterisationScope, KeepsTheUsersSetting) {
   ::setenv("LP_NUM_THREADS", "3", 1);
   {
-    const WorkerRasterisationScope two(2);
+    const WorkerRasterisationScope scope;
     EXPECT_EQ(std::string(lp_threads()), "3");
   }
   EXPECT_EQ(std::string(lp_threads()), "3");

@@ -238,7 +238,7 @@ BatchResult run_batch(const BatchJob& job, const BatchOptions& options) {
   const std::size_t thread_count =
       std::min<std::size_t>(static_cast<std::size_t>(options.jobs), queue.todo.size());
   {
-    const render::WorkerRasterisationScope rasterisation(static_cast<int>(thread_count));
+    const render::WorkerRasterisationScope rasterisation;
     std::vector<std::thread> workers;
     for (std::size_t t = 0; t < thread_count; ++t) {
       workers.emplace_back([&] { run_worker(job, options, queue, progress); });

@@ -1,9 +1,9 @@
 // `clutterscope bench visibility`: times, in one run on a generated workload, (a) our Eq. 10
 // visibility, (b) one full-scene render with readback (the floor), (c) bop_toolkit's method
 // (each object rendered alone on the 3W x 3H canvas, read back, compared on the CPU), and the
-// throughput of --jobs 2 against --jobs 1 (one render context per worker thread), with the CPU
-// cores each keeps busy: llvmpipe rasterises with one thread per core by default, so --jobs 1
-// already uses more than one core.
+// throughput of --jobs 2 against --jobs 1 as the batch runner runs them (one render context per
+// worker, each rasterising on its worker's thread), with the CPU cores each keeps busy; on
+// llvmpipe also --jobs 1 with llvmpipe's own rasteriser threads, for reference.
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -234,9 +234,10 @@ double process_cpu_seconds() {
   return static_cast<double>(time.tv_sec) + 1e-9 * static_cast<double>(time.tv_nsec);
 }
 
-// Computes (a) for every image with `jobs` threads, each with its own context.
+// Computes (a) for every image with `jobs` threads, each with its own context, rasterising on
+// its own thread as in the batch runner.
 ThroughputRun throughput_run(const Workload& workload, int jobs) {
-  const render::WorkerRasterisationScope rasterisation(jobs);  // as the batch runner does
+  const render::WorkerRasterisationScope rasterisation;
   std::vector<std::unique_ptr<BenchContext>> contexts(static_cast<std::size_t>(jobs));
   std::atomic<std::size_t> next{0};
   std::atomic<int> ready{0};
@@ -275,18 +276,33 @@ ThroughputRun throughput_run(const Workload& workload, int jobs) {
   return run;
 }
 
-// --jobs 1 against --jobs N, printed with the CPU time per image and the cores kept busy.
-void compare_jobs(const Workload& workload, int jobs, const char* label, const char* target) {
+void print_run(const char* label, const ThroughputRun& run, double images) {
+  std::printf("  %-9s %6.1f images/s, %6.2f ms CPU per image, %.2f cores busy\n", label,
+              images / run.seconds, 1e3 * run.cpu_seconds / images, run.cpu_seconds / run.seconds);
+}
+
+// --jobs 1 against --jobs N as the batch runner runs them, printed with the CPU time per image
+// and the cores kept busy; on llvmpipe also --jobs 1 with llvmpipe's own rasteriser threads,
+// which the runner does not use (see render::WorkerRasterisationScope).
+void compare_jobs(const Workload& workload, int jobs, bool software) {
   const ThroughputRun one = throughput_run(workload, 1);
   const ThroughputRun many = throughput_run(workload, jobs);
   const double images = static_cast<double>(workload.poses.size());
-  std::printf("throughput, %s:\n", label);
-  for (const auto& [n, run] : {std::pair<int, const ThroughputRun&>{1, one}, {jobs, many}}) {
-    std::printf("  --jobs %d %6.1f images/s, %6.2f ms CPU per image, %.2f cores busy\n", n,
-                images / run.seconds, 1e3 * run.cpu_seconds / images,
-                run.cpu_seconds / run.seconds);
-  }
-  std::printf("  ratio %.2f%s\n", one.seconds / many.seconds, target);
+  std::printf("throughput as the batch runner does it (--jobs N: N workers, N cores):\n");
+  const std::string many_label = "--jobs " + std::to_string(jobs);
+  print_run("--jobs 1", one, images);
+  print_run(many_label.c_str(), many, images);
+  std::printf("  ratio %.2f%s\n", one.seconds / many.seconds,
+              jobs == 2 ? " (target >= 1.7 for --jobs 2)" : "");
+  if (!software || std::getenv("LP_NUM_THREADS") != nullptr) return;
+  // The scope leaves a value the user set alone: this one comes from the outside.
+  setenv("LP_NUM_THREADS", std::to_string(std::thread::hardware_concurrency()).c_str(), 1);
+  const ThroughputRun threaded = throughput_run(workload, 1);
+  unsetenv("LP_NUM_THREADS");
+  std::printf("for reference, --jobs 1 with llvmpipe's rasteriser threads (LP_NUM_THREADS=%u):\n",
+              std::thread::hardware_concurrency());
+  print_run("--jobs 1", threaded, images);
+  std::printf("  %s against it: ratio %.2f\n", many_label.c_str(), threaded.seconds / many.seconds);
 }
 
 void run_bench(const BenchArguments& arguments) {
@@ -362,21 +378,7 @@ void run_bench(const BenchArguments& arguments) {
     std::printf("agreement: max |visible/px_count_all| difference between (a) and (c) = %.4f\n",
                 max_fraction_difference);
   }
-  if (arguments.jobs < 2) return;
-  compare_jobs(workload, arguments.jobs,
-               "as the batch runner does it (--jobs 1: llvmpipe's rasteriser threads; --jobs N >= "
-               "2: LP_NUM_THREADS=0)",
-               arguments.jobs == 2 ? " (target >= 1.7 for --jobs 2)" : "");
-  // llvmpipe reads LP_NUM_THREADS when a display is initialised; every display is terminated
-  // between runs and no other thread runs here, so setting it now is safe.
-  if (software && std::getenv("LP_NUM_THREADS") == nullptr) {
-    setenv("LP_NUM_THREADS", "0", 1);
-    compare_jobs(workload, arguments.jobs,
-                 "each context rasterising on its own thread (LP_NUM_THREADS=0): the scaling "
-                 "of workers alone",
-                 "");
-    unsetenv("LP_NUM_THREADS");
-  }
+  if (arguments.jobs >= 2) compare_jobs(workload, arguments.jobs, software);
 }
 
 }  // namespace

@@ -88,7 +88,10 @@ void add_dataset_options(CLI::App& command, DatasetOptions* options) {
                   "output folder; re-running into it resumes, a different job is refused")
       ->type_name("DIR")
       ->required();
-  command.add_option("--jobs,-j", options->jobs, "worker threads (one render context each)")
+  command
+      .add_option("--jobs,-j", options->jobs,
+                  "worker threads, one render context and one core each (on llvmpipe "
+                  "unless LP_NUM_THREADS is set)")
       ->type_name("N")
       ->capture_default_str()
       ->check(CLI::Range(1, 1024).description(""));
