@@ -14,6 +14,10 @@ bool ModelCacheOptions::IsValid(std::string* why) const {
     if (why != nullptr) *why = "proxy_triangles must be 0 (none) or >= 4";
     return false;
   }
+  if (!(proxy_tolerance_m >= 0) || !std::isfinite(proxy_tolerance_m)) {
+    if (why != nullptr) *why = "proxy_tolerance_m must be finite and >= 0";
+    return false;
+  }
   return true;
 }
 
@@ -42,8 +46,10 @@ ModelCache::Entry& ModelCache::entry(int obj_id) {
   auto loaded = std::make_unique<Entry>();
   loaded->full = std::make_unique<GpuMesh>(GpuMesh::upload(mesh));
   if (options_.proxy_triangles > 0) {
-    loaded->proxy =
-        std::make_unique<GpuMesh>(GpuMesh::upload(decimate(mesh, options_.proxy_triangles)));
+    DecimateOptions decimation;
+    decimation.max_triangles = options_.proxy_triangles;
+    decimation.tolerance_m = options_.proxy_tolerance_m;
+    loaded->proxy = std::make_unique<GpuMesh>(GpuMesh::upload(decimate(mesh, decimation)));
   }
   if (options_.keep_cpu_meshes) loaded->cpu = std::make_unique<Mesh>(std::move(mesh));
   return *entries_.emplace(obj_id, std::move(loaded)).first->second;

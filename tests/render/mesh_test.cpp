@@ -1,11 +1,18 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/render/mesh.hpp>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <map>
+#include <random>
 #include <string>
 
 namespace clutterscope::render {
@@ -211,44 +218,278 @@ TEST(BoxMesh, TriangleCountAndExtents) {
   }
 }
 
-// Distance from p to the surface of the axis-aligned box [-h, h].
-float distance_to_box_surface(const Eigen::Vector3f& p, const Eigen::Vector3f& h) {
-  const Eigen::Vector3f q = p.cwiseAbs() - h;
-  const float outside = q.cwiseMax(0.0f).norm();
-  const float inside = std::min(q.maxCoeff(), 0.0f);
-  return std::abs(outside + inside);
+// Every directed edge of a closed, consistently wound mesh has its reverse exactly once.
+bool closed_and_consistent(const Mesh& mesh) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+  for (const auto& t : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      if (++directed[{t[k], t[(k + 1) % 3]}] > 1) return false;
+    }
+  }
+  for (const auto& [edge, count] : directed) {
+    if (directed.count({edge.second, edge.first}) == 0) return false;
+  }
+  return true;
 }
 
-TEST(Decimate, ReducesToBudgetAndStaysOnTheSurface) {
+double signed_volume(const Mesh& mesh) {
+  double six_volume = 0;
+  for (const auto& t : mesh.triangles) {
+    six_volume += mesh.positions[t[0]].cast<double>().dot(
+        mesh.positions[t[1]].cast<double>().cross(mesh.positions[t[2]].cast<double>()));
+  }
+  return six_volume / 6;
+}
+
+double surface_area(const Mesh& mesh) {
+  double area = 0;
+  for (const auto& t : mesh.triangles) {
+    area += 0.5 * (mesh.positions[t[1]] - mesh.positions[t[0]])
+                      .cast<double>()
+                      .cross((mesh.positions[t[2]] - mesh.positions[t[0]]).cast<double>())
+                      .norm();
+  }
+  return area;
+}
+
+// Distance from p to the nearest triangle of `mesh` (brute force).
+double distance_to_mesh(const Eigen::Vector3d& p, const Mesh& mesh) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d a = mesh.positions[t[0]].cast<double>();
+    const Eigen::Vector3d b = mesh.positions[t[1]].cast<double>();
+    const Eigen::Vector3d c = mesh.positions[t[2]].cast<double>();
+    // Project onto the plane; inside the triangle that is the distance, else the nearest edge.
+    const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
+    const Eigen::Vector3d q = p - n.dot(p - a) * n;
+    const bool inside = (b - a).cross(q - a).dot(n) >= 0 && (c - b).cross(q - b).dot(n) >= 0 &&
+                        (a - c).cross(q - c).dot(n) >= 0;
+    double d = std::abs(n.dot(p - a));
+    if (!inside) {
+      d = std::numeric_limits<double>::infinity();
+      for (const auto& [e0, e1] : {std::pair{a, b}, std::pair{b, c}, std::pair{c, a}}) {
+        const double s = std::clamp((p - e0).dot(e1 - e0) / (e1 - e0).squaredNorm(), 0.0, 1.0);
+        d = std::min(d, (p - (e0 + s * (e1 - e0))).norm());
+      }
+    }
+    best = std::min(best, d);
+  }
+  return best;
+}
+
+// A closed lathe about z through (radius, z) profile points, bottom to top, with `segments`
+// around and flat caps; vertices shared, wound outward.
+Mesh lathe_mesh(const std::vector<Eigen::Vector2f>& profile, int segments) {
+  Mesh mesh;
+  const auto ring = static_cast<std::uint32_t>(segments);
+  for (const auto& point : profile) {
+    for (int i = 0; i < segments; ++i) {
+      const double angle = 2.0 * M_PI * i / segments;
+      mesh.positions.emplace_back(static_cast<float>(point.x() * std::cos(angle)),
+                                  static_cast<float>(point.x() * std::sin(angle)), point.y());
+    }
+  }
+  for (std::uint32_t p = 0; p + 1 < profile.size(); ++p) {
+    for (std::uint32_t i = 0; i < ring; ++i) {
+      const std::uint32_t a = p * ring + i, b = p * ring + (i + 1) % ring;
+      mesh.triangles.push_back({a, b, b + ring});
+      mesh.triangles.push_back({a, b + ring, a + ring});
+    }
+  }
+  const auto bottom = static_cast<std::uint32_t>(mesh.positions.size());
+  mesh.positions.emplace_back(0, 0, profile.front().y());
+  mesh.positions.emplace_back(0, 0, profile.back().y());
+  const auto top_ring = static_cast<std::uint32_t>(profile.size() - 1) * ring;
+  for (std::uint32_t i = 0; i < ring; ++i) {
+    mesh.triangles.push_back({bottom, (i + 1) % ring, i});
+    mesh.triangles.push_back({bottom + 1, top_ring + i, top_ring + (i + 1) % ring});
+  }
+  return mesh;
+}
+
+// A UV sphere of radius r: `rings` rings of latitude between the poles.
+Mesh sphere_mesh(float r, int rings, int segments) {
+  std::vector<Eigen::Vector2f> profile;
+  for (int j = 1; j <= rings; ++j) {
+    const double polar = M_PI * (1.0 - static_cast<double>(j) / (rings + 1));
+    profile.emplace_back(static_cast<float>(r * std::sin(polar)),
+                         static_cast<float>(r * std::cos(polar)));
+  }
+  Mesh mesh = lathe_mesh(profile, segments);
+  // Lift the cap centres to the poles.
+  mesh.positions[mesh.positions.size() - 2] = Eigen::Vector3f(0, 0, -r);
+  mesh.positions.back() = Eigen::Vector3f(0, 0, r);
+  return mesh;
+}
+
+TEST(Decimate, SubdividedBoxBecomesItsTwelveTriangles) {
   const Eigen::Vector3f size(0.1f, 0.06f, 0.04f);
-  const Mesh dense = box_mesh(size, 40);  // 19200 triangles
-  const Mesh proxy = decimate(dense, 1500);
-  EXPECT_LE(proxy.triangle_count(), 1500u);
-  EXPECT_GE(proxy.triangle_count(), 300u);  // not collapsed to a handful
+  const Mesh dense = box_mesh(size, 13);  // 2028 triangles, vertices duplicated per face
+  DecimateOptions options;
+  options.max_triangles = 200;
+  const Mesh proxy = decimate(dense, options);
+  EXPECT_EQ(proxy.triangle_count(), 12u);
+  EXPECT_EQ(proxy.positions.size(), 8u);
   EXPECT_EQ(proxy.normals.size(), proxy.positions.size());
-  // Cluster means of surface points stay within one grid cell of the surface, and the bounds
-  // shrink by less than a cell. The finest grid within budget has cells well under 1 cm here.
-  const float cell = 0.01f;
-  for (const auto& p : proxy.positions) {
-    EXPECT_LT(distance_to_box_surface(p, size / 2), cell);
+  // Corners are kept exactly.
+  EXPECT_EQ(proxy.bounds().min(), dense.bounds().min());
+  EXPECT_EQ(proxy.bounds().max(), dense.bounds().max());
+  for (const auto& p : proxy.positions) EXPECT_EQ(p.cwiseAbs(), size / 2);
+  EXPECT_TRUE(closed_and_consistent(proxy));
+  EXPECT_NEAR(signed_volume(proxy), size.prod(), 1e-9);
+}
+
+TEST(Decimate, CylinderKeepsTheSidesItsChordErrorNeeds) {
+  // r = 5 cm, 256 sides (chord error r (1 - cos(pi / 256)) = 3.8 um), 8 rings along z.
+  const float r = 0.05f, half_height = 0.07f;
+  std::vector<Eigen::Vector2f> profile;
+  for (int j = 0; j <= 8; ++j) profile.emplace_back(r, -half_height + 2 * half_height * j / 8);
+  const Mesh dense = lathe_mesh(profile, 256);
+  ASSERT_EQ(dense.triangle_count(), 256u * 18);
+  DecimateOptions options;
+  options.max_triangles = 1000;
+  options.tolerance_m = 0.0005;
+  const Mesh proxy = decimate(dense, options);
+  // Sides are planar strips and caps flat, so n sides need about 4n triangles; the chord error
+  // r (1 - cos(pi / n)) <= 0.5 mm needs n >= 23.
+  EXPECT_LE(proxy.triangle_count(), 4u * 48);
+  EXPECT_GE(proxy.triangle_count(), 2u * 23);
+  EXPECT_TRUE(closed_and_consistent(proxy));
+  EXPECT_GT(signed_volume(proxy), 0);
+  // Proxy vertices are vertices of the input, so on the true surface.
+  const auto distance_to_cylinder = [&](const Eigen::Vector3d& p) {
+    const double radial = std::hypot(p.x(), p.y()) - r, axial = std::abs(p.z()) - half_height;
+    if (radial <= 0 && axial <= 0) return std::abs(std::max(radial, axial));
+    return std::hypot(std::max(radial, 0.0), std::max(axial, 0.0));
+  };
+  for (const auto& p : proxy.positions) EXPECT_LT(distance_to_cylinder(p.cast<double>()), 1e-6);
+  // Dense samples of the true surface (side and caps) lie within the tolerance of the proxy,
+  // up to the input's own chord error and float rounding.
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> unit(0, 1);
+  double worst = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const double angle = 2 * M_PI * unit(rng);
+    Eigen::Vector3d p;
+    if (i % 2 == 0) {
+      p = {r * std::cos(angle), r * std::sin(angle), half_height * (2 * unit(rng) - 1)};
+    } else {
+      const double radius = r * std::sqrt(unit(rng));
+      p = {radius * std::cos(angle), radius * std::sin(angle),
+           i % 4 == 1 ? half_height : -half_height};
+    }
+    worst = std::max(worst, distance_to_mesh(p, proxy));
   }
-  EXPECT_LT((proxy.bounds().max() - dense.bounds().max()).cwiseAbs().maxCoeff(), cell);
-  EXPECT_LT((proxy.bounds().min() - dense.bounds().min()).cwiseAbs().maxCoeff(), cell);
+  std::printf("cylinder of %zu triangles -> %zu, worst distance of the true surface %.3f mm\n",
+              dense.triangle_count(), proxy.triangle_count(), 1e3 * worst);
+  EXPECT_LE(worst, options.tolerance_m + 1e-5);
+  EXPECT_GT(worst, 0.5 * options.tolerance_m);  // it did use the tolerance
+}
+
+TEST(Decimate, SphereMeetsTheCapClosedAndOutward) {
+  const float r = 0.05f;
+  const Mesh dense = sphere_mesh(r, 63, 128);  // 16128 triangles
+  DecimateOptions options;
+  options.max_triangles = 300;
+  options.tolerance_m = 0;
+  const Mesh proxy = decimate(dense, options);
+  EXPECT_LE(proxy.triangle_count(), 300u);
+  EXPECT_GE(proxy.triangle_count(), 296u);  // a sphere has no error-free collapse
+  EXPECT_TRUE(closed_and_consistent(proxy));
+  // All vertices are on the sphere, so the proxy lies inside the ball; a 300-triangle
+  // inscribed polyhedron of well-spread vertices misses a few % of the volume.
+  const double ball = 4.0 / 3.0 * M_PI * r * r * r;
+  std::printf("sphere of %zu triangles -> %zu, volume %.4f of the ball's\n", dense.triangle_count(),
+              proxy.triangle_count(), signed_volume(proxy) / ball);
+  EXPECT_LT(signed_volume(proxy), ball);
+  EXPECT_GT(signed_volume(proxy), 0.95 * ball);
+}
+
+TEST(Decimate, ScanSizedSphereReachesTheCap) {
+  // 500k triangles, the size of the largest BOP scans; prints the time (no wall-clock assert).
+  const float r = 0.05f;
+  const Mesh dense = sphere_mesh(r, 500, 500);
+  ASSERT_GE(dense.triangle_count(), 499000u);
+  DecimateOptions options;
+  options.max_triangles = 200;
+  const auto start = std::chrono::steady_clock::now();
+  const Mesh proxy = decimate(dense, options);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("sphere of %zu triangles -> %zu in %.2f s\n", dense.triangle_count(),
+              proxy.triangle_count(), seconds);
+  EXPECT_LE(proxy.triangle_count(), 200u);
+  EXPECT_TRUE(closed_and_consistent(proxy));
+  const double ball = 4.0 / 3.0 * M_PI * r * r * r;
+  EXPECT_LT(signed_volume(proxy), ball);
+  EXPECT_GT(signed_volume(proxy), 0.9 * ball);
+}
+
+TEST(Decimate, OpenSquareKeepsItsBorder) {
+  // A 10 x 10 grid of 0.1 m in z = 0: 200 triangles, one open border.
+  Mesh square;
+  const int n = 10;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) square.positions.emplace_back(0.01f * i, 0.01f * j, 0.0f);
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const std::uint32_t a = j * (n + 1) + i, b = a + 1, c = a + (n + 1), d = c + 1;
+      square.triangles.push_back({a, b, d});
+      square.triangles.push_back({a, d, c});
+    }
+  }
+  const Mesh proxy = decimate(square, DecimateOptions{});
+  EXPECT_EQ(proxy.triangle_count(), 2u);
+  EXPECT_EQ(proxy.bounds().min(), square.bounds().min());
+  EXPECT_EQ(proxy.bounds().max(), square.bounds().max());
+  EXPECT_NEAR(surface_area(proxy), surface_area(square), 1e-9);
   for (const auto& t : proxy.triangles) {
-    EXPECT_TRUE(t[0] != t[1] && t[1] != t[2] && t[0] != t[2]);
-    for (const auto index : t) EXPECT_LT(index, proxy.positions.size());
+    EXPECT_GT((proxy.positions[t[1]] - proxy.positions[t[0]])
+                  .cross(proxy.positions[t[2]] - proxy.positions[t[0]])
+                  .z(),
+              0);  // winding kept
+  }
+
+  // With a budget below what the tolerance allows on a curved sheet, border vertices still
+  // only slide along the border: the proxy's bounds stay those of the sheet.
+  Mesh sheet = square;
+  for (auto& p : sheet.positions) p.z() = 2.0f * (p.x() - 0.05f) * (p.x() - 0.05f);
+  DecimateOptions tight;
+  tight.max_triangles = 20;
+  const Mesh bent = decimate(sheet, tight);
+  EXPECT_LE(bent.triangle_count(), 20u);
+  EXPECT_EQ(bent.bounds().min().head<2>(), sheet.bounds().min().head<2>());
+  EXPECT_EQ(bent.bounds().max().head<2>(), sheet.bounds().max().head<2>());
+  for (const auto& p : bent.positions) {
+    EXPECT_FLOAT_EQ(p.z(), 2.0f * (p.x() - 0.05f) * (p.x() - 0.05f));
   }
 }
 
-TEST(Decimate, SmallMeshIsReturnedUnchanged) {
-  const Mesh box = box_mesh(Eigen::Vector3f(1, 1, 1), 2);
-  const Mesh same = decimate(box, 1000);
-  EXPECT_EQ(same.triangle_count(), box.triangle_count());
-  EXPECT_EQ(same.positions, box.positions);
+TEST(Decimate, SmallCurvedMeshIsKeptAtZeroTolerance) {
+  const Mesh sphere = sphere_mesh(0.05f, 5, 8);  // 80 triangles, no flat part
+  DecimateOptions options;
+  options.max_triangles = 1000;
+  options.tolerance_m = 0;
+  const Mesh same = decimate(sphere, options);
+  EXPECT_EQ(same.triangle_count(), sphere.triangle_count());
+  EXPECT_EQ(same.positions, sphere.positions);
 }
 
-TEST(Decimate, RejectsTinyBudget) {
-  EXPECT_THROW(decimate(box_mesh({1, 1, 1}), 2), std::invalid_argument);
+TEST(Decimate, RejectsInvalidOptions) {
+  DecimateOptions options;
+  options.max_triangles = 3;
+  EXPECT_THROW(decimate(box_mesh({1, 1, 1}), options), std::invalid_argument);
+  options = DecimateOptions{};
+  options.tolerance_m = -0.001;
+  EXPECT_THROW(decimate(box_mesh({1, 1, 1}), options), std::invalid_argument);
+  options.tolerance_m = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(decimate(box_mesh({1, 1, 1}), options), std::invalid_argument);
+  std::string why;
+  options = DecimateOptions{};
+  options.max_triangles = 2;
+  EXPECT_FALSE(options.IsValid(&why));
+  EXPECT_EQ(why, "max_triangles must be >= 4, got 2");
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/estimator/bench.hpp>
+#include <clutterscope/render/mesh.hpp>
 #include <clutterscope/tools/batch.hpp>
 #include <clutterscope/tools/estimate/scene_estimate.hpp>
 #include <cmath>
@@ -72,6 +73,23 @@ SceneTimes run_images(SceneEstimator& estimator, const std::vector<datasets::Sce
   return times;
 }
 
+// The proxies the unary renders: triangles of each model before -> after, and the time.
+void print_proxies(const datasets::BopDataset& dataset, const EstimateOptions& options) {
+  render::DecimateOptions decimation;
+  decimation.max_triangles = static_cast<std::size_t>(options.proxy_triangles);
+  std::printf("proxies (QEM edge collapse, cap %zu, tolerance %.2f mm), obj_id:triangles:",
+              decimation.max_triangles, 1e3 * decimation.tolerance_m);
+  double seconds = 0;
+  for (const datasets::ModelInfo& model : dataset.models()) {
+    const render::Mesh mesh = render::load_mesh(model.mesh_path);
+    const Clock::time_point start = Clock::now();
+    const render::Mesh proxy = render::decimate(mesh, decimation);
+    seconds += std::chrono::duration<double>(Clock::now() - start).count();
+    std::printf(" %d:%zu->%zu", model.obj_id, mesh.triangle_count(), proxy.triangle_count());
+  }
+  std::printf(" (%.1f ms in all)\n", 1e3 * seconds);
+}
+
 void run_bench(const BenchEstimateArguments& arguments) {
   const std::vector<int> particles = parse_id_list(arguments.particle_list, "--particles-list");
   if (arguments.images < 1 || arguments.iterations < 1 || arguments.particles < 2 ||
@@ -94,6 +112,7 @@ void run_bench(const BenchEstimateArguments& arguments) {
   SceneEstimator estimator(dataset, options);
   std::printf("dataset %s: %zu images, M = %d, %d iterations\n", arguments.dataset.c_str(),
               views.size(), arguments.particles, arguments.iterations);
+  print_proxies(dataset, options);
   estimator.estimate(views.front());  // warm-up: models loaded and uploaded
   const SceneTimes main = run_images(estimator, views);
   std::printf(

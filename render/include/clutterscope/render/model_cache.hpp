@@ -18,9 +18,10 @@
 namespace clutterscope::render {
 
 struct ModelCacheOptions {
-  // > 0: proxy() returns a decimated mesh of at most about this many triangles (1-2k for
-  // hypothesis scoring). 0: no proxies.
+  // > 0: proxy() returns the mesh decimated to at most this many triangles, and further while
+  // within proxy_tolerance_m (see DecimateOptions). 0: no proxies.
   std::size_t proxy_triangles = 0;
+  double proxy_tolerance_m = DecimateOptions{}.tolerance_m;
   // Keep the CPU meshes (metres) for cpu_mesh(), e.g. model points for ICP.
   bool keep_cpu_meshes = false;
   // Multiplies model file coordinates to get metres (BOP: millimetres).
