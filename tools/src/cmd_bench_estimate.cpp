@@ -42,6 +42,7 @@ struct BenchEstimateArguments {
   std::string particle_list = "25,50,100,200";
   std::uint64_t seed = 1;
   int proxy_triangles = EstimateOptions{}.proxy_triangles;
+  double proxy_tolerance_mm = 1e3 * EstimateOptions{}.proxy_tolerance_m;
   int grid_pixels = EstimateOptions{}.grid_pixels;
 };
 
@@ -77,6 +78,7 @@ SceneTimes run_images(SceneEstimator& estimator, const std::vector<datasets::Sce
 void print_proxies(const datasets::BopDataset& dataset, const EstimateOptions& options) {
   render::DecimateOptions decimation;
   decimation.max_triangles = static_cast<std::size_t>(options.proxy_triangles);
+  decimation.tolerance_m = options.proxy_tolerance_m;
   std::printf("proxies (QEM edge collapse, cap %zu, tolerance %.2f mm), obj_id:triangles:",
               decimation.max_triangles, 1e3 * decimation.tolerance_m);
   double seconds = 0;
@@ -108,6 +110,7 @@ void run_bench(const BenchEstimateArguments& arguments) {
   options.iterations = arguments.iterations;
   options.seed = arguments.seed;
   options.proxy_triangles = arguments.proxy_triangles;
+  options.proxy_tolerance_m = 1e-3 * arguments.proxy_tolerance_mm;
   options.grid_pixels = arguments.grid_pixels;
   SceneEstimator estimator(dataset, options);
   std::printf("dataset %s: %zu images, M = %d, %d iterations\n", arguments.dataset.c_str(),
@@ -241,6 +244,10 @@ void add_bench_estimate_command(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   command->add_option("--seed", arguments->seed, "seed")->capture_default_str();
   command->add_option("--proxy-triangles", arguments->proxy_triangles, "decimated model size")
+      ->capture_default_str();
+  command
+      ->add_option("--proxy-tolerance-mm", arguments->proxy_tolerance_mm,
+                   "decimated models' surface tolerance (mm)")
       ->capture_default_str();
   command->add_option("--grid-pixels", arguments->grid_pixels, "scoring grid size")
       ->capture_default_str();

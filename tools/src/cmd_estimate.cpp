@@ -308,6 +308,7 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
   job.fingerprint["unary_truncation_mm"] = 1e3 * e.unary_truncation_m;
   job.fingerprint["grid_pixels"] = e.grid_pixels;
   job.fingerprint["proxy_triangles"] = e.proxy_triangles;
+  job.fingerprint["proxy_tolerance_mm"] = 1e3 * e.proxy_tolerance_m;
   job.fingerprint["bandwidth_floor_mm"] = 1e3 * e.min_bandwidth_m;
   job.fingerprint["icp_max_distance_mm"] = 1e3 * e.icp_max_distance_m;
   job.make_worker = [&dataset, &arguments]() -> ItemFunction {
@@ -367,8 +368,12 @@ void add_estimate_command(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   command
       ->add_option("--proxy-triangles", e.proxy_triangles,
-                   "triangles of the decimated models rendered for the unary")
+                   "triangles of the decimated models rendered for the unary (at most)")
       ->capture_default_str();
+  command->add_option_function<double>(
+      "--proxy-tolerance-mm", [&e](double mm) { e.proxy_tolerance_m = 1e-3 * mm; },
+      "decimate the scoring models below --proxy-triangles while their surface stays within "
+      "this distance (mm, default 0.5)");
   command->add_flag("--save-beliefs", arguments->save_beliefs,
                     "also write the belief samples of every iteration (camera frame, mm)");
   command->add_flag("--no-time", arguments->no_time,

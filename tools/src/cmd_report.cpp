@@ -42,6 +42,8 @@ const std::vector<StepOption>& step_options() {
       {"estimate", "--unary-truncation-mm", false, "estimate: truncation of the Eq. 6 unary"},
       {"estimate", "--grid-pixels", false, "estimate: scoring grid size"},
       {"estimate", "--proxy-triangles", false, "estimate: triangles of the scoring models"},
+      {"estimate", "--proxy-tolerance-mm", false,
+       "estimate: surface tolerance of the scoring models"},
       {"estimate", "--bandwidth-floor-mm", false, "estimate: floor of the kernel bandwidth"},
       {"estimate", "--icp-max-distance-mm", false, "estimate: ICP correspondence distance"},
       {"estimate", "--save-beliefs", true,

@@ -185,6 +185,8 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (!(unary_truncation_m > 0)) return fail("unary truncation must be > 0");
   if (grid_pixels < 4) return fail("scoring grid must be >= 4 pixels");
   if (proxy_triangles < 12) return fail("proxy triangles must be >= 12");
+  if (!(proxy_tolerance_m >= 0) || !std::isfinite(proxy_tolerance_m))
+    return fail("proxy tolerance must be a finite number >= 0");
   if (!(icp_max_distance_m > 0)) return fail("ICP correspondence distance must be > 0");
   if (!(support_z_sigma_m > 0) || !(non_contact_floor > 0) || !(min_bandwidth_m > 0))
     return fail("support sigma, non-contact floor and bandwidth floor must be > 0");
@@ -201,6 +203,7 @@ struct SceneEstimator::State {
                [&] {
                  render::ModelCacheOptions cache;
                  cache.proxy_triangles = static_cast<std::size_t>(opts.proxy_triangles);
+                 cache.proxy_tolerance_m = opts.proxy_tolerance_m;
                  cache.keep_cpu_meshes = true;
                  return cache;
                }()),

@@ -43,7 +43,10 @@ struct EstimateOptions {
   double unary_lambda = -5.0;
   double unary_truncation_m = 0.04;
   int grid_pixels = 32;
-  int proxy_triangles = 200;  // decimated models for scoring (enough at a 32-px grid)
+  // Decimated models for scoring: at most proxy_triangles, fewer while the surface stays within
+  // proxy_tolerance_m (render::DecimateOptions; boxes become 12 triangles).
+  int proxy_triangles = 200;
+  double proxy_tolerance_m = 0.0005;
   // ICP ignores observed points farther than this from the model: short, so that each fit stays
   // in the basin of its belief sample and the spread of the K fits reflects the belief's (with
   // 2 cm, fits of barely visible objects slid together onto occluders: confident and wrong; with
