@@ -85,8 +85,10 @@ TEST_F(TinyDataset, ModelCacheLoadsEachModelOnceAndBuildsLabelledInstances) {
   // Units: millimetre PLY -> metres.
   EXPECT_TRUE(cache.cpu_mesh(1).bounds().max().isApprox(kSmallBox.cast<float>() / 2, 1e-5f));
   EXPECT_EQ(cache.mesh(1).triangle_count(), 4800u);
-  EXPECT_LE(cache.proxy(1).triangle_count(), 1000u);
-  EXPECT_GE(cache.proxy(1).triangle_count(), 100u);
+  // The proxy of the subdivided box is the box's 12 triangles, corners exact.
+  EXPECT_EQ(cache.proxy(1).triangle_count(), 12u);
+  EXPECT_EQ(cache.proxy(1).bounds().min(), cache.mesh(1).bounds().min());
+  EXPECT_EQ(cache.proxy(1).bounds().max(), cache.mesh(1).bounds().max());
   EXPECT_THROW(cache.mesh(99), datasets::DatasetError);
 
   const DepthLabelImage image = renderer.render(Intrinsics::from_camera(view.camera), instances);
