@@ -181,6 +181,21 @@ class Decimator {
     }
   }
 
+  double max_distance() {
+    // A mesh left above the budget (no allowed collapse) was never measured.
+    if (!tracking_) start_tracking();
+    double worst = 0;
+    for (std::size_t f = 0; f < faces_.size(); ++f) {
+      if (!face_alive_[f]) continue;
+      const auto& t = faces_[f];
+      for (const auto s : face_samples_[f]) {
+        worst = std::max(worst, squared_distance_to_triangle(samples_[s], position_[t[0]],
+                                                             position_[t[1]], position_[t[2]]));
+      }
+    }
+    return std::sqrt(worst);
+  }
+
   Mesh result() const {
     Mesh proxy;
     std::vector<std::uint32_t> index(position_.size(), 0);
@@ -498,8 +513,15 @@ class Decimator {
     return v;
   }
 
+  double squared_distance(const Eigen::Vector3d& sample, std::uint32_t f) const {
+    const auto& t = faces_[f];
+    return squared_distance_to_triangle(sample, position_[t[0]], position_[t[1]], position_[t[2]]);
+  }
+
   // From here on every collapse is measured: the original vertices and face centroids are
-  // assigned to the nearest face around the vertices they were merged into.
+  // assigned to their nearest face, found from the faces around the vertices they were merged
+  // into by walking to neighbouring faces while the distance shrinks (the face around the
+  // representative may lie far away in the same plane).
   void start_tracking() {
     tracking_ = true;
     face_samples_.assign(faces_.size(), {});
@@ -509,9 +531,7 @@ class Decimator {
       std::uint32_t best_face = 0;
       for (const auto origin : origins) {
         for (const auto f : vertex_faces_[representative(origin)]) {
-          const auto& t = faces_[f];
-          const double d = squared_distance_to_triangle(sample, position_[t[0]], position_[t[1]],
-                                                        position_[t[2]]);
+          const double d = squared_distance(sample, f);
           if (d < best) {
             best = d;
             best_face = f;
@@ -519,6 +539,20 @@ class Decimator {
         }
       }
       if (best < std::numeric_limits<double>::infinity()) {
+        for (bool closer = true; closer;) {
+          closer = false;
+          const std::array<std::uint32_t, 3> corners = faces_[best_face];
+          for (const auto w : corners) {
+            for (const auto f : vertex_faces_[w]) {
+              const double d = squared_distance(sample, f);
+              if (d < best) {
+                best = d;
+                best_face = f;
+                closer = true;
+              }
+            }
+          }
+        }
         face_samples_[best_face].push_back(static_cast<std::uint32_t>(samples_.size()));
         samples_.push_back(sample);
       }
@@ -571,11 +605,12 @@ bool DecimateOptions::IsValid(std::string* why) const {
   return true;
 }
 
-Mesh decimate(const Mesh& mesh, const DecimateOptions& options) {
+Mesh decimate(const Mesh& mesh, const DecimateOptions& options, DecimateSummary* summary) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("DecimateOptions: " + why);
   Decimator decimator(mesh);
   decimator.run(options);
+  if (summary != nullptr) summary->max_distance_m = decimator.max_distance();
   return decimator.result();
 }
 

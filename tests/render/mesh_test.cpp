@@ -323,20 +323,25 @@ Mesh sphere_mesh(float r, int rings, int segments) {
 }
 
 TEST(Decimate, SubdividedBoxBecomesItsTwelveTriangles) {
-  const Eigen::Vector3f size(0.1f, 0.06f, 0.04f);
-  const Mesh dense = box_mesh(size, 13);  // 2028 triangles, vertices duplicated per face
-  DecimateOptions options;
-  options.max_triangles = 200;
-  const Mesh proxy = decimate(dense, options);
-  EXPECT_EQ(proxy.triangle_count(), 12u);
-  EXPECT_EQ(proxy.positions.size(), 8u);
-  EXPECT_EQ(proxy.normals.size(), proxy.positions.size());
-  // Corners are kept exactly.
-  EXPECT_EQ(proxy.bounds().min(), dense.bounds().min());
-  EXPECT_EQ(proxy.bounds().max(), dense.bounds().max());
-  for (const auto& p : proxy.positions) EXPECT_EQ(p.cwiseAbs(), size / 2);
-  EXPECT_TRUE(closed_and_consistent(proxy));
-  EXPECT_NEAR(signed_volume(proxy), size.prod(), 1e-9);
+  // Vertices duplicated per face; 2028 and 768 triangles (the catalogue's boxes).
+  for (const auto& [size, subdivisions] : {std::pair{Eigen::Vector3f(0.1f, 0.06f, 0.04f), 13},
+                                           std::pair{Eigen::Vector3f(0.14f, 0.068f, 0.07f), 8}}) {
+    const Mesh dense = box_mesh(size, subdivisions);
+    DecimateOptions options;
+    options.max_triangles = 200;
+    DecimateSummary summary;
+    const Mesh proxy = decimate(dense, options, &summary);
+    EXPECT_EQ(proxy.triangle_count(), 12u);
+    EXPECT_LT(summary.max_distance_m, 1e-9);
+    EXPECT_EQ(proxy.positions.size(), 8u);
+    EXPECT_EQ(proxy.normals.size(), proxy.positions.size());
+    // Corners are kept exactly.
+    EXPECT_EQ(proxy.bounds().min(), dense.bounds().min());
+    EXPECT_EQ(proxy.bounds().max(), dense.bounds().max());
+    for (const auto& p : proxy.positions) EXPECT_EQ(p.cwiseAbs(), size / 2);
+    EXPECT_TRUE(closed_and_consistent(proxy));
+    EXPECT_NEAR(signed_volume(proxy), size.prod(), 1e-9);
+  }
 }
 
 TEST(Decimate, CylinderKeepsTheSidesItsChordErrorNeeds) {
@@ -349,7 +354,8 @@ TEST(Decimate, CylinderKeepsTheSidesItsChordErrorNeeds) {
   DecimateOptions options;
   options.max_triangles = 1000;
   options.tolerance_m = 0.0005;
-  const Mesh proxy = decimate(dense, options);
+  DecimateSummary summary;
+  const Mesh proxy = decimate(dense, options, &summary);
   // Sides are planar strips and caps flat, so n sides need about 4n triangles; the chord error
   // r (1 - cos(pi / n)) <= 0.5 mm needs n >= 23.
   EXPECT_LE(proxy.triangle_count(), 4u * 48);
@@ -384,6 +390,13 @@ TEST(Decimate, CylinderKeepsTheSidesItsChordErrorNeeds) {
               dense.triangle_count(), proxy.triangle_count(), 1e3 * worst);
   EXPECT_LE(worst, options.tolerance_m + 1e-5);
   EXPECT_GT(worst, 0.5 * options.tolerance_m);  // it did use the tolerance
+  // The summary bounds the distance of the input's vertices to the proxy, within the tolerance.
+  double worst_vertex = 0;
+  for (const auto& p : dense.positions) {
+    worst_vertex = std::max(worst_vertex, distance_to_mesh(p.cast<double>(), proxy));
+  }
+  EXPECT_GE(summary.max_distance_m, worst_vertex - 1e-9);
+  EXPECT_LE(summary.max_distance_m, options.tolerance_m);
 }
 
 TEST(Decimate, SphereMeetsTheCapClosedAndOutward) {

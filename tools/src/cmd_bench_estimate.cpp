@@ -79,15 +79,19 @@ void print_proxies(const datasets::BopDataset& dataset, const EstimateOptions& o
   render::DecimateOptions decimation;
   decimation.max_triangles = static_cast<std::size_t>(options.proxy_triangles);
   decimation.tolerance_m = options.proxy_tolerance_m;
-  std::printf("proxies (QEM edge collapse, cap %zu, tolerance %.2f mm), obj_id:triangles:",
-              decimation.max_triangles, 1e3 * decimation.tolerance_m);
+  std::printf(
+      "proxies (QEM edge collapse, cap %zu, tolerance %.2f mm), obj_id:triangles(max distance "
+      "mm):",
+      decimation.max_triangles, 1e3 * decimation.tolerance_m);
   double seconds = 0;
   for (const datasets::ModelInfo& model : dataset.models()) {
     const render::Mesh mesh = render::load_mesh(model.mesh_path);
     const Clock::time_point start = Clock::now();
-    const render::Mesh proxy = render::decimate(mesh, decimation);
+    render::DecimateSummary summary;
+    const render::Mesh proxy = render::decimate(mesh, decimation, &summary);
     seconds += std::chrono::duration<double>(Clock::now() - start).count();
-    std::printf(" %d:%zu->%zu", model.obj_id, mesh.triangle_count(), proxy.triangle_count());
+    std::printf(" %d:%zu->%zu(%.2f)", model.obj_id, mesh.triangle_count(), proxy.triangle_count(),
+                1e3 * summary.max_distance_m);
   }
   std::printf(" (%.1f ms in all)\n", 1e3 * seconds);
 }

@@ -373,7 +373,7 @@ void add_estimate_command(CLI::App& app, int* exit_code) {
   command->add_option_function<double>(
       "--proxy-tolerance-mm", [&e](double mm) { e.proxy_tolerance_m = 1e-3 * mm; },
       "decimate the scoring models below --proxy-triangles while their surface stays within "
-      "this distance (mm, default 0.5)");
+      "this distance (mm, default 1)");
   command->add_flag("--save-beliefs", arguments->save_beliefs,
                     "also write the belief samples of every iteration (camera frame, mm)");
   command->add_flag("--no-time", arguments->no_time,
