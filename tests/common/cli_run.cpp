@@ -31,6 +31,14 @@ fs::path stderr_capture_file() {
 
 std::string quoted(const fs::path& path) { return "\"" + path.string() + "\""; }
 
+std::size_t occurrences(const std::string& text, const std::string& part) {
+  std::size_t count = 0;
+  for (std::size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + 1)) {
+    ++count;
+  }
+  return count;
+}
+
 CommandRun run_clutterscope(const std::string& arguments, Stderr stderr_mode) {
   const fs::path errors_file = stderr_capture_file();
   std::string command = quoted(CLUTTERSCOPE_BINARY) + " " + arguments;

@@ -2,6 +2,7 @@
 
 // Runs the built `clutterscope` binary from end-to-end tests and captures what it printed.
 
+#include <cstddef>
 #include <filesystem>
 #include <string>
 
@@ -20,5 +21,8 @@ struct CommandRun {
 CommandRun run_clutterscope(const std::string& arguments, Stderr stderr_mode = Stderr::kSeparate);
 
 std::string quoted(const std::filesystem::path& path);
+
+// How often `part` occurs in `text` (overlapping occurrences counted), e.g. lines of output.
+std::size_t occurrences(const std::string& text, const std::string& part);
 
 }  // namespace clutterscope::testing

@@ -17,14 +17,6 @@ namespace fs = std::filesystem;
 
 bool software_renderer() { return render::EglContext::create().is_software(); }
 
-std::size_t occurrences(const std::string& text, const std::string& part) {
-  std::size_t count = 0;
-  for (std::size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + 1)) {
-    ++count;
-  }
-  return count;
-}
-
 TEST(BenchCliGl, VisibilityPrintsTheRatiosAndBothThroughputs) {
   std::string why;
   if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
@@ -51,11 +43,13 @@ TEST(BenchCliGl, EstimatePrintsTheBreakdownAndTheTiledComparisons) {
           " --particles 10 --iterations 1 --particles-list 8,10 --rounds 2",
       clutterscope::testing::Stderr::kMergedIntoOutput);
   ASSERT_EQ(run.exit_code, 0) << run.output;
-  for (const char* line : {"time per scene: ", "hypotheses scored per second", "fitted growth",
-                           "exact-labels"}) {
+  for (const char* line :
+       {"time per scene: ", "hypotheses scored per second", "fitted growth", "exact-labels"}) {
     EXPECT_NE(run.output.find(line), std::string::npos) << line << "\n" << run.output;
   }
-  EXPECT_EQ(occurrences(run.output, "speed-up "), software_renderer() ? 2u : 1u) << run.output;
+  EXPECT_EQ(clutterscope::testing::occurrences(run.output, "speed-up "),
+            software_renderer() ? 2u : 1u)
+      << run.output;
   EXPECT_NE(run.output.find("in 2 rounds"), std::string::npos) << run.output;
 }
 

@@ -2,16 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
+#include "cli_run.hpp"
+
 namespace clutterscope::tools {
 namespace {
-
-std::size_t count(const std::string& text, const std::string& part) {
-  std::size_t n = 0;
-  for (std::size_t at = text.find(part); at != std::string::npos; at = text.find(part, at + 1)) {
-    ++n;
-  }
-  return n;
-}
 
 TEST(Progress, FormatsEta) {
   EXPECT_EQ(Progress::format_duration(0), "0:00");
@@ -28,7 +24,7 @@ TEST(Progress, WithoutTerminalPrintsOneSummaryLine) {
     progress.finish(1);
   }
   const std::string output = ::testing::internal::GetCapturedStderr();
-  EXPECT_EQ(count(output, "\n"), 1u) << output;
+  EXPECT_EQ(clutterscope::testing::occurrences(output, "\n"), 1u) << output;
   EXPECT_EQ(output.rfind("visibility: 10/10 images (6 computed, 4 resumed, 1 failed) in ", 0), 0u)
       << output;
   EXPECT_NE(output.find(" images/s\n"), std::string::npos) << output;
@@ -47,7 +43,7 @@ TEST(Progress, BarShowsCountRateAndEtaAndIsThrottled) {
   EXPECT_NE(output.find("0/1000"), std::string::npos) << output;
   EXPECT_NE(output.find("images/s  ETA "), std::string::npos) << output;
   // One draw at start, then at most one per 100 ms: far fewer than one per item.
-  EXPECT_LT(count(output, "\restimate ["), 20u);
+  EXPECT_LT(clutterscope::testing::occurrences(output, "\restimate ["), 20u);
   EXPECT_NE(output.find("estimate: 1000/1000 images (1000 computed, 0 resumed, 0 failed)"),
             std::string::npos)
       << output;
