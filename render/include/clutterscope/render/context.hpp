@@ -58,8 +58,8 @@ class EglContext {
 // While alive and LP_NUM_THREADS is unset, sets LP_NUM_THREADS=0 so that every worker's
 // context rasterises on the worker's own thread: `--jobs N` then uses N cores, as a cluster
 // allocation of N cores expects. llvmpipe's own rasteriser threads would add synchronisation
-// (16.5 against 21 ms CPU per visibility image) and, at --jobs 1, bought 13% throughput for
-// 43% more CPU. llvmpipe reads the variable when a display is initialised, so create the
+// (16.5 against 21 ms CPU per visibility image) and, at --jobs 1, bought 7-28% throughput for
+// 17-46% more CPU. llvmpipe reads the variable when a display is initialised, so create the
 // scope before the workers' contexts and while no other thread runs. No effect on hardware
 // drivers.
 class WorkerRasterisationScope {
