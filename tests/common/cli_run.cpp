@@ -62,4 +62,8 @@ CommandRun run_clutterscope(const std::string& arguments, Stderr stderr_mode) {
   return result;
 }
 
+CommandRun run_merged(const std::string& arguments) {
+  return run_clutterscope(arguments, Stderr::kMergedIntoOutput);
+}
+
 }  // namespace clutterscope::testing

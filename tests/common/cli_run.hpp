@@ -20,6 +20,9 @@ struct CommandRun {
 // `arguments` are shell words appended to the binary's path; quote paths with quoted().
 CommandRun run_clutterscope(const std::string& arguments, Stderr stderr_mode = Stderr::kSeparate);
 
+// run_clutterscope with stderr interleaved into `output`, as most end-to-end tests read it.
+CommandRun run_merged(const std::string& arguments);
+
 std::string quoted(const std::filesystem::path& path);
 
 // How often `part` occurs in `text` (overlapping occurrences counted), e.g. lines of output.

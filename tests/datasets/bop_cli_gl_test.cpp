@@ -22,11 +22,7 @@ using testing::write_text;
 using testing::write_tiny_bop_dataset;
 
 using clutterscope::testing::CommandRun;
-
-CommandRun run(const std::string& arguments) {
-  return clutterscope::testing::run_clutterscope(arguments,
-                                                 clutterscope::testing::Stderr::kMergedIntoOutput);
-}
+using clutterscope::testing::run_merged;
 
 void replace_first(const fs::path& path, const std::string& from, const std::string& to) {
   std::string text = read_text(path);
@@ -147,8 +143,8 @@ TEST_P(BopCliBadInput, ExitsWithCodeThreeNamingFileAndField) {
   const fs::path root = write_tiny_bop_dataset(dir.path() / "dataset");
   bad.break_dataset(root);
   const CommandRun result =
-      run("visibility \"" + root.string() + "\" --mode bop19 --quiet --jobs 1 --out \"" +
-          (dir.path() / "out").string() + "\" " + bad.extra_arguments);
+      run_merged("visibility \"" + root.string() + "\" --mode bop19 --quiet --jobs 1 --out \"" +
+                 (dir.path() / "out").string() + "\" " + bad.extra_arguments);
   EXPECT_FALSE(result.signalled) << "crashed:\n" << result.output;
   EXPECT_EQ(result.exit_code, 3) << result.output;
   for (const auto& part : bad.expected) {

@@ -25,11 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 
 using clutterscope::testing::CommandRun;
-
-CommandRun run(const std::string& arguments) {
-  return clutterscope::testing::run_clutterscope(arguments,
-                                                 clutterscope::testing::Stderr::kMergedIntoOutput);
-}
+using clutterscope::testing::run_merged;
 
 std::string read_text(const fs::path& path) {
   std::ifstream stream(path, std::ios::binary);
@@ -55,7 +51,7 @@ class GeneratorCli : public ::testing::Test {
     root_ = new fs::path(fs::temp_directory_path() /
                          ("clutterscope_generator_cli_test_" + std::to_string(::getpid())));
     fs::remove_all(*root_);
-    generate_output_ = new CommandRun(run(generate_arguments(*root_ / "a")));
+    generate_output_ = new CommandRun(run_merged(generate_arguments(*root_ / "a")));
   }
   static void TearDownTestSuite() {
     if (root_) fs::remove_all(*root_);
@@ -163,7 +159,7 @@ TEST_F(GeneratorCli, FollowsBopToolkitLayoutAndKeys) {
 
 TEST_F(GeneratorCli, SameSeedSameBytes) {
   const fs::path again = *root_ / "b";
-  const CommandRun second = run(generate_arguments(again) + " --quiet");
+  const CommandRun second = run_merged(generate_arguments(again) + " --quiet");
   ASSERT_EQ(second.exit_code, 0) << second.output;
   std::size_t files = 0;
   for (const auto& entry : fs::recursive_directory_iterator(*root_ / "a")) {
@@ -179,13 +175,13 @@ TEST_F(GeneratorCli, DetectAndGraphReproduceTheGenerator) {
   const fs::path dataset_root = *root_ / "a";
   const fs::path detections = *root_ / "detect.json";
   const CommandRun detect =
-      run("detect \"" + dataset_root.string() +
-          "\" --seed 17 --duplicates 0.2 --false-positives 0.5 --quiet --out \"" +
-          detections.string() + "\"");
+      run_merged("detect \"" + dataset_root.string() +
+                 "\" --seed 17 --duplicates 0.2 --false-positives 0.5 --quiet --out \"" +
+                 detections.string() + "\"");
   ASSERT_EQ(detect.exit_code, 0) << detect.output;
   EXPECT_EQ(read_text(detections), read_text(dataset_root / "detections_test.json"));
 
-  const CommandRun printed = run("graph \"" + dataset_root.string() + "\"");
+  const CommandRun printed = run_merged("graph \"" + dataset_root.string() + "\"");
   ASSERT_EQ(printed.exit_code, 0) << printed.output;
   const std::size_t begin = printed.output.find('{');
   ASSERT_NE(begin, std::string::npos) << printed.output;
@@ -205,14 +201,14 @@ TEST_F(GeneratorCli, DetectAndGraphReproduceTheGenerator) {
 
 TEST_F(GeneratorCli, ImpossibleRequestsFailFastNamingTheLimit) {
   const std::string out = "--out \"" + (*root_ / "never").string() + "\" --quiet";
-  const CommandRun no_stack = run("generate " + out + " --max-stack 0");
+  const CommandRun no_stack = run_merged("generate " + out + " --max-stack 0");
   EXPECT_EQ(no_stack.exit_code, 2);
   EXPECT_NE(no_stack.output.find("max stack (L) must be >= 1"), std::string::npos)
       << no_stack.output;
-  const CommandRun no_views = run("generate " + out + " --views 0");
+  const CommandRun no_views = run_merged("generate " + out + " --views 0");
   EXPECT_EQ(no_views.exit_code, 2);
   EXPECT_NE(no_views.output.find("views must be >= 1"), std::string::npos) << no_views.output;
-  const CommandRun too_many = run("generate " + out + " --objects 400 --max-stack 2");
+  const CommandRun too_many = run_merged("generate " + out + " --objects 400 --max-stack 2");
   EXPECT_EQ(too_many.exit_code, 2);
   EXPECT_NE(too_many.output.find("fit in the tray"), std::string::npos) << too_many.output;
   EXPECT_FALSE(fs::exists(*root_ / "never" / "test"));

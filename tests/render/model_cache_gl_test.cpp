@@ -117,17 +117,13 @@ TEST_F(TinyDataset, SceneInstancesNamesSceneImageAndGtOfABadModel) {
 }
 
 using clutterscope::testing::CommandRun;
-
-CommandRun run(const std::string& arguments) {
-  return clutterscope::testing::run_clutterscope(arguments,
-                                                 clutterscope::testing::Stderr::kMergedIntoOutput);
-}
+using clutterscope::testing::run_merged;
 
 TEST_F(TinyDataset, RenderCommandWritesBopDepthLabelsAndPreview) {
   if (!fs::exists(CLUTTERSCOPE_BINARY)) GTEST_SKIP() << "build the clutterscope target first";
   const fs::path out = root_ / "out";
   const CommandRun result =
-      run("render " + root_.string() + " --scene 1 --image 0 --out " + out.string());
+      run_merged("render " + root_.string() + " --scene 1 --image 0 --out " + out.string());
   ASSERT_EQ(result.exit_code, 0) << result.output;
   EXPECT_NE(result.output.find("GL renderer: "), std::string::npos) << result.output;
 
@@ -152,15 +148,16 @@ TEST_F(TinyDataset, RenderCommandExitCodes) {
   if (!fs::exists(CLUTTERSCOPE_BINARY)) GTEST_SKIP() << "build the clutterscope target first";
   const std::string out = (root_ / "out").string();
   const CommandRun unknown_scene =
-      run("render " + root_.string() + " --scene 7 --image 0 --out " + out);
+      run_merged("render " + root_.string() + " --scene 7 --image 0 --out " + out);
   EXPECT_EQ(unknown_scene.exit_code, 3) << unknown_scene.output;
   EXPECT_NE(unknown_scene.output.find("7"), std::string::npos);
-  const CommandRun missing_scene = run("render " + root_.string() + " --image 0 --out " + out);
+  const CommandRun missing_scene =
+      run_merged("render " + root_.string() + " --image 0 --out " + out);
   EXPECT_EQ(missing_scene.exit_code, 2) << missing_scene.output;
-  const CommandRun bad_center =
-      run("render " + root_.string() + " --scene 1 --image 0 --pixel-center quarter --out " + out);
+  const CommandRun bad_center = run_merged(
+      "render " + root_.string() + " --scene 1 --image 0 --pixel-center quarter --out " + out);
   EXPECT_EQ(bad_center.exit_code, 2) << bad_center.output;
-  const CommandRun help = run("render --help");
+  const CommandRun help = run_merged("render --help");
   EXPECT_EQ(help.exit_code, 0);
   EXPECT_NE(help.output.find("--pixel-center"), std::string::npos);
 }

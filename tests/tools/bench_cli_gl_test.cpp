@@ -20,9 +20,8 @@ bool software_renderer() { return render::EglContext::create().is_software(); }
 TEST(BenchCliGl, VisibilityPrintsTheRatiosAndBothThroughputs) {
   std::string why;
   if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
-  const clutterscope::testing::CommandRun run = clutterscope::testing::run_clutterscope(
-      "bench visibility --images 4 --objects 3 --triangles 200 --width 160 --height 120 --jobs 2",
-      clutterscope::testing::Stderr::kMergedIntoOutput);
+  const clutterscope::testing::CommandRun run = clutterscope::testing::run_merged(
+      "bench visibility --images 4 --objects 3 --triangles 200 --width 160 --height 120 --jobs 2");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   for (const char* line : {"ratio (a)/(b) = ", "ratio (c)/(a) = ", "agreement: ",
                            "(target >= 1.7 for --jobs 2)", "cores busy"}) {
@@ -38,10 +37,9 @@ TEST(BenchCliGl, EstimatePrintsTheBreakdownAndTheTiledComparisons) {
   std::string why;
   if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
   const fs::path tray10 = fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray10";
-  const clutterscope::testing::CommandRun run = clutterscope::testing::run_clutterscope(
+  const clutterscope::testing::CommandRun run = clutterscope::testing::run_merged(
       "bench estimate " + clutterscope::testing::quoted(tray10) +
-          " --particles 10 --iterations 1 --particles-list 8,10 --rounds 2",
-      clutterscope::testing::Stderr::kMergedIntoOutput);
+      " --particles 10 --iterations 1 --particles-list 8,10 --rounds 2");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   for (const char* line :
        {"time per scene: ", "hypotheses scored per second", "fitted growth", "exact-labels"}) {
@@ -54,11 +52,9 @@ TEST(BenchCliGl, EstimatePrintsTheBreakdownAndTheTiledComparisons) {
 }
 
 TEST(BenchCliGl, EstimateRefusesZeroRounds) {
-  const clutterscope::testing::CommandRun run = clutterscope::testing::run_clutterscope(
+  const clutterscope::testing::CommandRun run = clutterscope::testing::run_merged(
       "bench estimate " +
-          clutterscope::testing::quoted(fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray10") +
-          " --rounds 0",
-      clutterscope::testing::Stderr::kMergedIntoOutput);
+      clutterscope::testing::quoted(fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray10") + " --rounds 0");
   EXPECT_EQ(run.exit_code, 2) << run.output;
   EXPECT_NE(run.output.find("--rounds must be >= 1"), std::string::npos) << run.output;
 }

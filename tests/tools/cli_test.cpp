@@ -16,11 +16,7 @@ namespace {
 namespace fs = std::filesystem;
 
 using clutterscope::testing::CommandRun;
-
-CommandRun run(const std::string& arguments) {
-  return clutterscope::testing::run_clutterscope(arguments,
-                                                 clutterscope::testing::Stderr::kMergedIntoOutput);
-}
+using clutterscope::testing::run_merged;
 
 // The command names listed under "Subcommands:" in `clutterscope --help`.
 std::vector<std::string> listed_commands(const std::string& help) {
@@ -48,13 +44,13 @@ TEST(Cli, BinaryExists) {
 }
 
 TEST(Cli, Version) {
-  const CommandRun result = run("--version");
+  const CommandRun result = run_merged("--version");
   EXPECT_EQ(result.exit_code, 0);
   EXPECT_EQ(result.output, std::string("clutterscope ") + CLUTTERSCOPE_VERSION + "\n");
 }
 
 TEST(Cli, HelpListsCommandsAndExitCodes) {
-  const CommandRun result = run("--help");
+  const CommandRun result = run_merged("--help");
   EXPECT_EQ(result.exit_code, 0);
   const std::vector<std::string> commands = listed_commands(result.output);
   for (const char* expected : {"render", "visibility", "merge"}) {
@@ -66,12 +62,12 @@ TEST(Cli, HelpListsCommandsAndExitCodes) {
 }
 
 TEST(Cli, EveryCommandHasAnInformativeHelp) {
-  std::vector<std::string> commands = listed_commands(run("--help").output);
+  std::vector<std::string> commands = listed_commands(run_merged("--help").output);
   ASSERT_FALSE(commands.empty());
   // Breadth first, so commands with subcommands (bench visibility) are checked too.
   for (std::size_t i = 0; i < commands.size(); ++i) {
     const std::string command = commands[i];
-    const CommandRun result = run(command + " --help");
+    const CommandRun result = run_merged(command + " --help");
     for (const std::string& nested : listed_commands(result.output)) {
       commands.push_back(command + " " + nested);
     }
@@ -93,7 +89,7 @@ TEST(Cli, UsageErrorsExitTwo) {
         "visibility " + dataset + " --out o --shard 3/2",
         "visibility " + dataset + " --out o --scenes 5-x", std::string("merge"),
         std::string("merge /no/such/folder --out o")}) {
-    const CommandRun result = run(arguments);
+    const CommandRun result = run_merged(arguments);
     EXPECT_EQ(result.exit_code, 2) << arguments << ":\n" << result.output;
     EXPECT_FALSE(result.output.empty()) << arguments;
   }
@@ -101,7 +97,8 @@ TEST(Cli, UsageErrorsExitTwo) {
 
 TEST(Cli, MergeRefusesAFolderThatIsNotABatch) {
   const fs::path folder = testing::fresh_dir("cli_not_batch");
-  const CommandRun result = run("merge " + folder.string() + " --out " + (folder / "out").string());
+  const CommandRun result =
+      run_merged("merge " + folder.string() + " --out " + (folder / "out").string());
   EXPECT_EQ(result.exit_code, 2) << result.output;
   EXPECT_NE(result.output.find("not a clutterscope batch folder"), std::string::npos)
       << result.output;
@@ -116,7 +113,7 @@ TEST(Cli, MergeWithMissingImagesExitsThree) {
       << R"({"format": 1, "fingerprint": {"command": "visibility", "tool_version": "x",)"
       << R"( "items": {"count": 2, "fnv1a64": "0"}, "options": {}}})";
   const CommandRun result =
-      run("merge " + shard.string() + " --out " + (shard / "merged").string());
+      run_merged("merge " + shard.string() + " --out " + (shard / "merged").string());
   EXPECT_EQ(result.exit_code, 3) << result.output;
   EXPECT_NE(result.output.find("2 of 2 items have no result (e.g. test/000001/000000"),
             std::string::npos)

@@ -25,8 +25,7 @@ namespace {
 namespace fs = std::filesystem;
 
 int run_quiet(const std::string& arguments, std::string* output) {
-  const clutterscope::testing::CommandRun run = clutterscope::testing::run_clutterscope(
-      arguments, clutterscope::testing::Stderr::kMergedIntoOutput);
+  const clutterscope::testing::CommandRun run = clutterscope::testing::run_merged(arguments);
   *output += run.output;
   return run.exit_code;
 }

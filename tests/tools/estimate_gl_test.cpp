@@ -32,11 +32,7 @@ using testing::fresh_dir;
 using testing::read_file;
 
 using clutterscope::testing::CommandRun;
-
-CommandRun run(const std::string& arguments) {
-  return clutterscope::testing::run_clutterscope(arguments,
-                                                 clutterscope::testing::Stderr::kMergedIntoOutput);
-}
+using clutterscope::testing::run_merged;
 
 // Two scenes of 5 objects in a tray, 320 x 240, generated once for the whole suite.
 class EstimateGl : public ::testing::Test {
@@ -44,10 +40,10 @@ class EstimateGl : public ::testing::Test {
   static void SetUpTestSuite() {
     if (!render::egl_available()) return;
     dataset_ = new fs::path(fresh_dir("estimate_dataset"));
-    const CommandRun generated =
-        run("generate --out " + dataset_->string() +
-            " --preset tray --scenes 2 --objects 5 --views 1 --width 320 --height 240 --seed 3 "
-            "--quiet");
+    const CommandRun generated = run_merged(
+        "generate --out " + dataset_->string() +
+        " --preset tray --scenes 2 --objects 5 --views 1 --width 320 --height 240 --seed 3 "
+        "--quiet");
     ASSERT_EQ(generated.exit_code, 0) << generated.output;
   }
   static void TearDownTestSuite() {
@@ -197,11 +193,11 @@ const std::string kFast = " --particles 30 --iterations 3 --icp-samples 5 --quie
 
 TEST_F(EstimateGl, JobsOneAndTwoGiveByteIdenticalOutputs) {
   const fs::path one = fresh_dir("estimate_jobs1"), two = fresh_dir("estimate_jobs2");
-  const CommandRun a = run("estimate " + dataset_->string() + " --out " + one.string() +
-                           " --jobs 1 --no-time" + kFast);
+  const CommandRun a = run_merged("estimate " + dataset_->string() + " --out " + one.string() +
+                                  " --jobs 1 --no-time" + kFast);
   ASSERT_EQ(a.exit_code, 0) << a.output;
-  const CommandRun b = run("estimate " + dataset_->string() + " --out " + two.string() +
-                           " --jobs 2 --no-time" + kFast);
+  const CommandRun b = run_merged("estimate " + dataset_->string() + " --out " + two.string() +
+                                  " --jobs 2 --no-time" + kFast);
   ASSERT_EQ(b.exit_code, 0) << b.output;
   for (const char* file : {"estimates.csv", "results_bop.csv", "summary.json"})
     EXPECT_EQ(read_file(one / file), read_file(two / file)) << file;
@@ -219,12 +215,12 @@ TEST_F(EstimateGl, JobsOneAndTwoGiveByteIdenticalOutputs) {
 
 TEST_F(EstimateGl, TimedRunsDifferOnlyInTheTimeColumn) {
   const fs::path one = fresh_dir("estimate_timed1"), two = fresh_dir("estimate_timed2");
-  ASSERT_EQ(run("estimate " + dataset_->string() + " --out " + one.string() +
-                " --jobs 1 --scenes 0" + kFast)
+  ASSERT_EQ(run_merged("estimate " + dataset_->string() + " --out " + one.string() +
+                       " --jobs 1 --scenes 0" + kFast)
                 .exit_code,
             0);
-  ASSERT_EQ(run("estimate " + dataset_->string() + " --out " + two.string() +
-                " --jobs 2 --scenes 0" + kFast)
+  ASSERT_EQ(run_merged("estimate " + dataset_->string() + " --out " + two.string() +
+                       " --jobs 2 --scenes 0" + kFast)
                 .exit_code,
             0);
   auto a = read_csv(one / "estimates.csv"), b = read_csv(two / "estimates.csv");
@@ -239,8 +235,8 @@ TEST_F(EstimateGl, TimedRunsDifferOnlyInTheTimeColumn) {
 
 TEST_F(EstimateGl, ThresholdMustBePositive) {
   const fs::path out = fresh_dir("estimate_threshold");
-  const CommandRun result = run("estimate " + dataset_->string() + " --out " + out.string() +
-                                " --variance-threshold-cm2 0" + kFast);
+  const CommandRun result = run_merged("estimate " + dataset_->string() + " --out " + out.string() +
+                                       " --variance-threshold-cm2 0" + kFast);
   EXPECT_EQ(result.exit_code, 2) << result.output;
   EXPECT_NE(result.output.find("--variance-threshold-cm2"), std::string::npos) << result.output;
 }
@@ -300,8 +296,8 @@ TEST_F(EstimateGl, BadInputIsRecordedPerObjectWithoutNaN) {
   std::ofstream(detections) << list.dump();
 
   const fs::path out = fresh_dir("estimate_bad_out");
-  const CommandRun result = run("estimate " + data.string() + " --out " + out.string() +
-                                " --detections " + detections.string() + kFast);
+  const CommandRun result = run_merged("estimate " + data.string() + " --out " + out.string() +
+                                       " --detections " + detections.string() + kFast);
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const std::string csv = read_file(out / "estimates.csv");
   EXPECT_EQ(csv.find("nan"), std::string::npos);
@@ -330,7 +326,8 @@ TEST_F(EstimateGl, WithoutGraphAndDepthInfersTheGraphAndSimulatesTheSensor) {
     fs::remove_all(data / "test" / scene / "depth");
   }
   const fs::path out = fresh_dir("estimate_bare_out");
-  const CommandRun result = run("estimate " + data.string() + " --out " + out.string() + kFast);
+  const CommandRun result =
+      run_merged("estimate " + data.string() + " --out " + out.string() + kFast);
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const nlohmann::json counts = nlohmann::json::parse(read_file(out / "summary.json")).at("counts");
   EXPECT_EQ(counts.at("images_with_inferred_graph"), 2);

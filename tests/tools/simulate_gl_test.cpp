@@ -28,8 +28,7 @@ namespace {
 namespace fs = std::filesystem;
 
 int run(const std::string& arguments, std::string* output) {
-  const clutterscope::testing::CommandRun result = clutterscope::testing::run_clutterscope(
-      arguments, clutterscope::testing::Stderr::kMergedIntoOutput);
+  const clutterscope::testing::CommandRun result = clutterscope::testing::run_merged(arguments);
   *output += result.output;
   return result.exit_code;
 }
