@@ -8,6 +8,7 @@
 
 #include "gl.hpp"
 #include "gl_program.hpp"
+#include "window_bounds.hpp"
 
 namespace clutterscope::render {
 
@@ -221,7 +222,7 @@ cv::Rect BopDepthRenderer::projected_rect(const BopModel& model, const Eigen::Ma
   const cv::Rect whole(0, 0, target.width, target.height);
   const Eigen::Vector3d& min = model.bbox_min();
   const Eigen::Vector3d& size = model.bbox_size();
-  double min_x = INFINITY, min_y = INFINITY, max_x = -INFINITY, max_y = -INFINITY;
+  WindowBounds bounds;
   for (int corner = 0; corner < 8; ++corner) {
     const Eigen::Vector3d local((corner & 4) ? min.x() + size.x() : min.x(),
                                 (corner & 2) ? min.y() + size.y() : min.y(),
@@ -229,21 +230,9 @@ cv::Rect BopDepthRenderer::projected_rect(const BopModel& model, const Eigen::Ma
     const Eigen::Vector3d p = R * local + t;
     if (!(p.z() > 0) || !p.allFinite()) return whole;  // the projection is unbounded
     // Window x of the projection (bop_toolkit's y_down projection: pixel u spans [u, u + 1)).
-    const double x = target.fx * p.x() / p.z() + target.cx;
-    const double y = target.fy * p.y() / p.z() + target.cy;
-    min_x = std::min(min_x, x);
-    max_x = std::max(max_x, x);
-    min_y = std::min(min_y, y);
-    max_y = std::max(max_y, y);
+    bounds.add(target.fx * p.x() / p.z() + target.cx, target.fy * p.y() / p.z() + target.cy);
   }
-  const auto clamp = [](double value, int high) {
-    return static_cast<int>(std::clamp(value, -1.0, static_cast<double>(high) + 1.0));
-  };
-  const int x0 = clamp(std::floor(min_x) - 2, target.width);
-  const int y0 = clamp(std::floor(min_y) - 2, target.height);
-  const int x1 = clamp(std::ceil(max_x) + 2, target.width);
-  const int y1 = clamp(std::ceil(max_y) + 2, target.height);
-  return cv::Rect(x0, y0, std::max(0, x1 - x0), std::max(0, y1 - y0)) & whole;
+  return bounds.pixels(2, target.width, target.height);
 }
 
 cv::Mat BopDepthRenderer::render_object(const BopModel& model, const Eigen::Matrix3d& R,

@@ -11,6 +11,7 @@
 
 #include "gl.hpp"
 #include "gl_program.hpp"
+#include "window_bounds.hpp"
 
 namespace clutterscope::render {
 
@@ -851,28 +852,16 @@ cv::Rect Renderer::projected_rect(const Intrinsics& intrinsics, const Instance& 
   const cv::Rect whole(0, 0, intrinsics.width, intrinsics.height);
   const Eigen::AlignedBox3f& box = instance.mesh->bounds();
   const double shift = pixel_shift(intrinsics.pixel_center);
-  double min_x = INFINITY, min_y = INFINITY, max_x = -INFINITY, max_y = -INFINITY;
+  WindowBounds bounds;
   for (int corner = 0; corner < 8; ++corner) {
     const Eigen::Vector3d p =
         instance.model_to_camera *
         box.corner(static_cast<Eigen::AlignedBox3f::CornerType>(corner)).cast<double>();
     if (!(p.z() >= intrinsics.near_m)) return whole;  // the projection is unbounded
-    const double x = intrinsics.fx * p.x() / p.z() + intrinsics.cx + shift;
-    const double y = intrinsics.fy * p.y() / p.z() + intrinsics.cy + shift;
-    min_x = std::min(min_x, x);
-    max_x = std::max(max_x, x);
-    min_y = std::min(min_y, y);
-    max_y = std::max(max_y, y);
+    bounds.add(intrinsics.fx * p.x() / p.z() + intrinsics.cx + shift,
+               intrinsics.fy * p.y() / p.z() + intrinsics.cy + shift);
   }
-  // Pixel u covers window [u, u + 1); one pixel of margin against rounding.
-  const auto clamp = [](double value, int high) {
-    return static_cast<int>(std::clamp(value, -1.0, static_cast<double>(high) + 1.0));
-  };
-  const int x0 = clamp(std::floor(min_x) - 1, intrinsics.width);
-  const int y0 = clamp(std::floor(min_y) - 1, intrinsics.height);
-  const int x1 = clamp(std::ceil(max_x) + 1, intrinsics.width);
-  const int y1 = clamp(std::ceil(max_y) + 1, intrinsics.height);
-  return cv::Rect(x0, y0, std::max(0, x1 - x0), std::max(0, y1 - y0)) & whole;
+  return bounds.pixels(1, intrinsics.width, intrinsics.height);  // one pixel against rounding
 }
 
 void Renderer::render_each_alone(const Intrinsics& intrinsics,
