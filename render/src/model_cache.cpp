@@ -21,6 +21,13 @@ bool ModelCacheOptions::IsValid(std::string* why) const {
   return true;
 }
 
+DecimateOptions ModelCacheOptions::proxy_decimation() const {
+  DecimateOptions decimation;
+  decimation.max_triangles = proxy_triangles;
+  decimation.tolerance_m = proxy_tolerance_m;
+  return decimation;
+}
+
 struct ModelCache::Entry {
   std::unique_ptr<GpuMesh> full;
   std::unique_ptr<GpuMesh> proxy;
@@ -46,10 +53,8 @@ ModelCache::Entry& ModelCache::entry(int obj_id) {
   auto loaded = std::make_unique<Entry>();
   loaded->full = std::make_unique<GpuMesh>(GpuMesh::upload(mesh));
   if (options_.proxy_triangles > 0) {
-    DecimateOptions decimation;
-    decimation.max_triangles = options_.proxy_triangles;
-    decimation.tolerance_m = options_.proxy_tolerance_m;
-    loaded->proxy = std::make_unique<GpuMesh>(GpuMesh::upload(decimate(mesh, decimation)));
+    loaded->proxy =
+        std::make_unique<GpuMesh>(GpuMesh::upload(decimate(mesh, options_.proxy_decimation())));
   }
   if (options_.keep_cpu_meshes) loaded->cpu = std::make_unique<Mesh>(std::move(mesh));
   return *entries_.emplace(obj_id, std::move(loaded)).first->second;

@@ -81,9 +81,7 @@ SceneTimes run_images(SceneEstimator& estimator, const std::vector<datasets::Sce
 
 // The proxies the unary renders: triangles of each model before -> after, and the time.
 void print_proxies(const datasets::BopDataset& dataset, const EstimateOptions& options) {
-  render::DecimateOptions decimation;
-  decimation.max_triangles = static_cast<std::size_t>(options.proxy_triangles);
-  decimation.tolerance_m = options.proxy_tolerance_m;
+  const render::DecimateOptions decimation = options.model_cache().proxy_decimation();
   std::printf(
       "proxies (QEM edge collapse, cap %zu, tolerance %.2f mm), obj_id:triangles(max distance "
       "mm):",
@@ -164,8 +162,7 @@ void compare_tiled_with_one_by_one(const datasets::BopDataset& dataset,
   std::printf(
       "unary scoring of %ld hypotheses in %d rounds: tiled %.1f us/hypothesis, one render + "
       "readback per hypothesis %.1f us/hypothesis, speed-up %.1fx (target >= 5x; rounds "
-      "%.1f-%.1fx, "
-      "median %.1fx); max |log phi| difference %.3g\n",
+      "%.1f-%.1fx, median %.1fx); max |log phi| difference %.3g\n",
       scored, arguments.rounds, 1e6 * tiled / scored, 1e6 * single / scored, single / tiled,
       round_ratios.front(), round_ratios.back(), round_ratios[round_ratios.size() / 2],
       max_difference);

@@ -170,6 +170,14 @@ std::set<int> support_cycle_members(int count, const std::vector<std::pair<int, 
 
 }  // namespace
 
+render::ModelCacheOptions EstimateOptions::model_cache() const {
+  render::ModelCacheOptions cache;
+  cache.proxy_triangles = static_cast<std::size_t>(proxy_triangles);
+  cache.proxy_tolerance_m = proxy_tolerance_m;
+  cache.keep_cpu_meshes = true;
+  return cache;
+}
+
 bool EstimateOptions::IsValid(std::string* why) const {
   auto fail = [&](const std::string& message) {
     if (why) *why = message;
@@ -199,14 +207,7 @@ struct SceneEstimator::State {
         options(opts),
         context(render::EglContext::create()),
         renderer(context),
-        models(data,
-               [&] {
-                 render::ModelCacheOptions cache;
-                 cache.proxy_triangles = static_cast<std::size_t>(opts.proxy_triangles);
-                 cache.proxy_tolerance_m = opts.proxy_tolerance_m;
-                 cache.keep_cpu_meshes = true;
-                 return cache;
-               }()),
+        models(data, opts.model_cache()),
         scorer(std::make_shared<RenderHypothesisScorer>(
             renderer, models,
             estimator::PixelCostOptions{opts.unary_lambda, opts.unary_truncation_m})) {}

@@ -27,6 +27,8 @@ struct ModelCacheOptions {
   // Multiplies model file coordinates to get metres (BOP: millimetres).
   double scale_to_metres = 0.001;
   bool IsValid(std::string* why) const;
+  // How proxy() decimates (proxy_triangles > 0).
+  DecimateOptions proxy_decimation() const;
 };
 
 class ModelCache {

@@ -20,6 +20,7 @@
 #include <clutterscope/estimator/mixture.hpp>
 #include <clutterscope/estimator/nbp.hpp>
 #include <clutterscope/estimator/scorer.hpp>
+#include <clutterscope/render/model_cache.hpp>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -58,6 +59,8 @@ struct EstimateOptions {
   double min_bandwidth_m =
       0.005;  // floor of the kernel standard deviation: keeps the K ICP starts apart
   bool IsValid(std::string* why) const;
+  // The estimator's models: proxies for the unary, CPU meshes for ICP.
+  render::ModelCacheOptions model_cache() const;
 };
 
 // One belief sample in the camera frame (metres).
