@@ -232,31 +232,14 @@ class Decimator {
   };
 
   void weld(const Mesh& mesh) {
-    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> buckets;
-    std::vector<std::uint32_t> welded(mesh.positions.size());
-    for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
-      // + 0.0f turns -0 into +0, so both weld.
-      const Eigen::Vector3f p = mesh.positions[i].array() + 0.0f;
-      std::uint32_t bits[3];
-      std::memcpy(bits, p.data(), sizeof(bits));
-      const std::uint64_t key = (std::uint64_t{bits[0]} * 0x9E3779B97F4A7C15ull) ^
-                                (std::uint64_t{bits[1]} * 0xC2B2AE3D27D4EB4Full) ^ bits[2];
-      std::vector<std::uint32_t>& bucket = buckets[key];
-      std::uint32_t found = static_cast<std::uint32_t>(original_.size());
-      for (const std::uint32_t candidate : bucket) {
-        if (original_[candidate] == p) found = candidate;
-      }
-      if (found == original_.size()) {
-        bucket.push_back(found);
-        original_.push_back(p);
-      }
-      welded[i] = found;
-    }
+    WeldedVertices welded = weld_vertices(mesh);
+    original_ = std::move(welded.positions);
+    const std::vector<std::uint32_t>& index_of = welded.index_of;
     position_.reserve(original_.size());
     for (const auto& p : original_) position_.push_back(p.cast<double>());
     vertex_faces_.resize(original_.size());
     for (const auto& t : mesh.triangles) {
-      const std::array<std::uint32_t, 3> w = {welded[t[0]], welded[t[1]], welded[t[2]]};
+      const std::array<std::uint32_t, 3> w = {index_of[t[0]], index_of[t[1]], index_of[t[2]]};
       if (w[0] == w[1] || w[1] == w[2] || w[2] == w[0]) continue;
       for (const auto v : w) vertex_faces_[v].push_back(static_cast<std::uint32_t>(faces_.size()));
       faces_.push_back(w);
@@ -603,6 +586,31 @@ bool DecimateOptions::IsValid(std::string* why) const {
     return false;
   }
   return true;
+}
+
+WeldedVertices weld_vertices(const Mesh& mesh) {
+  WeldedVertices welded;
+  welded.index_of.resize(mesh.positions.size());
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> buckets;
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+    // + 0.0f turns -0 into +0, so both weld.
+    const Eigen::Vector3f p = mesh.positions[i].array() + 0.0f;
+    std::uint32_t bits[3];
+    std::memcpy(bits, p.data(), sizeof(bits));
+    const std::uint64_t key = (std::uint64_t{bits[0]} * 0x9E3779B97F4A7C15ull) ^
+                              (std::uint64_t{bits[1]} * 0xC2B2AE3D27D4EB4Full) ^ bits[2];
+    std::vector<std::uint32_t>& bucket = buckets[key];
+    auto found = static_cast<std::uint32_t>(welded.positions.size());
+    for (const std::uint32_t candidate : bucket) {
+      if (welded.positions[candidate] == p) found = candidate;
+    }
+    if (found == welded.positions.size()) {
+      bucket.push_back(found);
+      welded.positions.push_back(p);
+    }
+    welded.index_of[i] = found;
+  }
+  return welded;
 }
 
 Mesh decimate(const Mesh& mesh, const DecimateOptions& options, DecimateSummary* summary) {

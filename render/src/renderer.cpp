@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <map>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -361,18 +360,11 @@ const Eigen::AlignedBox3f& GpuMesh::bounds() const { return state_->bounds; }
 
 namespace {
 
-// See GpuMesh::State::closed_orientation. Vertices are welded by exact position, since meshes
-// often duplicate vertices along seams of normals or texture coordinates; a mesh is closed when
-// every edge is used exactly once in each direction.
+// See GpuMesh::State::closed_orientation. Vertices are welded by exact position (weld_vertices),
+// since meshes often duplicate vertices along seams of normals or texture coordinates; a mesh is
+// closed when every edge is used exactly once in each direction.
 int closed_orientation(const Mesh& mesh) {
-  std::map<std::array<float, 3>, std::uint32_t> ids;
-  std::vector<std::uint32_t> welded(mesh.positions.size());
-  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-    const Eigen::Vector3f& p = mesh.positions[v];
-    welded[v] = ids.emplace(std::array<float, 3>{p.x(), p.y(), p.z()},
-                            static_cast<std::uint32_t>(ids.size()))
-                    .first->second;
-  }
+  const std::vector<std::uint32_t> welded = weld_vertices(mesh).index_of;
   std::unordered_map<std::uint64_t, int> directed_edges;
   directed_edges.reserve(mesh.triangles.size() * 3);
   double six_volume = 0;

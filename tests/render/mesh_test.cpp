@@ -489,6 +489,23 @@ TEST(Decimate, SmallCurvedMeshIsKeptAtZeroTolerance) {
   EXPECT_EQ(same.positions, sphere.positions);
 }
 
+TEST(WeldVertices, MergesDuplicatesBySeamAndSignedZero) {
+  // box_mesh repeats each corner once per face for flat normals: 24 vertices, 8 positions.
+  const Mesh box = box_mesh({0.2f, 0.1f, 0.05f});
+  ASSERT_EQ(box.positions.size(), 24u);
+  const WeldedVertices welded = weld_vertices(box);
+  EXPECT_EQ(welded.positions.size(), 8u);
+  ASSERT_EQ(welded.index_of.size(), box.positions.size());
+  for (std::size_t i = 0; i < box.positions.size(); ++i) {
+    EXPECT_EQ(welded.positions[welded.index_of[i]], box.positions[i]) << i;
+  }
+  Mesh signed_zero;
+  signed_zero.positions = {{0.0f, 1.0f, 0.0f}, {-0.0f, 1.0f, 0.0f}, {1.0f, 0.0f, 0.0f}};
+  const WeldedVertices zero = weld_vertices(signed_zero);
+  EXPECT_EQ(zero.positions.size(), 2u);
+  EXPECT_EQ(zero.index_of, (std::vector<std::uint32_t>{0, 0, 1}));
+}
+
 TEST(Decimate, RejectsInvalidOptions) {
   DecimateOptions options;
   options.max_triangles = 3;

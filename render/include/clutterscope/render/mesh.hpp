@@ -32,6 +32,16 @@ struct MeshLoadOptions {
 // model.
 Mesh load_mesh(const std::filesystem::path& path, const MeshLoadOptions& options = {});
 
+// The mesh's vertices merged by exact position (-0 and +0 alike): meshes often duplicate
+// vertices along seams of normals or texture coordinates, which would otherwise read as
+// borders. `positions` holds each distinct position once, in order of first use;
+// `index_of[i]` is the welded index of mesh vertex i.
+struct WeldedVertices {
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<std::uint32_t> index_of;
+};
+WeldedVertices weld_vertices(const Mesh& mesh);
+
 // Quadric-error-metric edge collapse (Garland & Heckbert 1997), for the proxies rendered in
 // hypothesis scoring. Vertices are first welded by exact position, so meshes that duplicate
 // vertices per face for flat normals keep their seams closed. Each step is a half-edge collapse
