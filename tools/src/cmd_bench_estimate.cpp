@@ -215,14 +215,13 @@ void run_bench(const BenchEstimateArguments& arguments) {
   compare_tiled_with_one_by_one(dataset, options, views, arguments,
                                 "with llvmpipe's rasteriser threads (the driver's default, as "
                                 "in the run above)");
-  // llvmpipe reads LP_NUM_THREADS when a display is initialised; the estimators above have
-  // terminated theirs.
+  // As the batch runner runs `estimate`; llvmpipe reads LP_NUM_THREADS when a display is
+  // initialised, and the estimators above have terminated theirs.
   if (std::getenv("LP_NUM_THREADS") == nullptr && software_renderer()) {
-    setenv("LP_NUM_THREADS", "0", 1);
+    const render::WorkerRasterisationScope one_thread_per_context;
     compare_tiled_with_one_by_one(
         dataset, options, views, arguments,
         "each context rasterising on its own thread (LP_NUM_THREADS=0), as `estimate` runs");
-    unsetenv("LP_NUM_THREADS");
   }
 
   // Growth in M.
