@@ -295,12 +295,15 @@ void compare_jobs(const Workload& workload, int jobs, bool software) {
   std::printf("  ratio %.2f%s\n", one.seconds / many.seconds,
               jobs == 2 ? " (target >= 1.7 for --jobs 2)" : "");
   if (!software || std::getenv("LP_NUM_THREADS") != nullptr) return;
-  // The scope leaves a value the user set alone: this one comes from the outside.
-  setenv("LP_NUM_THREADS", std::to_string(std::thread::hardware_concurrency()).c_str(), 1);
+  // The runner's scope leaves a value set from outside alone. llvmpipe reads the variable when
+  // a display is initialised; every display is terminated between runs and no other thread
+  // runs here, so setting it now is safe.
+  const unsigned cores = std::thread::hardware_concurrency();
+  setenv("LP_NUM_THREADS", std::to_string(cores).c_str(), 1);
   const ThroughputRun threaded = throughput_run(workload, 1);
   unsetenv("LP_NUM_THREADS");
   std::printf("for reference, --jobs 1 with llvmpipe's rasteriser threads (LP_NUM_THREADS=%u):\n",
-              std::thread::hardware_concurrency());
+              cores);
   print_run("--jobs 1", threaded, images);
   std::printf("  %s against it: ratio %.2f\n", many_label.c_str(), threaded.seconds / many.seconds);
 }
