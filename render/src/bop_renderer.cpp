@@ -103,9 +103,7 @@ std::array<float, 16> mvp_uniform(const Matrix4& view, const Matrix4& proj) {
 // BopModel
 
 struct BopModel::State {
-  gl::VertexArray vertex_array;
-  gl::Buffer vertices;
-  gl::Buffer indices;
+  gl::MeshBuffers buffers;
   GLsizei index_count = 0;
   Eigen::Vector3d bbox_min = Eigen::Vector3d::Zero();
   Eigen::Vector3d bbox_size = Eigen::Vector3d::Zero();
@@ -132,21 +130,7 @@ BopModel BopModel::upload(const Mesh& mesh) {
   state.bbox_min = lo;
   state.bbox_size = hi - lo;
   state.index_count = static_cast<GLsizei>(mesh.triangles.size() * 3);
-  state.vertex_array = gl::make_vertex_array();
-  state.vertices = gl::make_buffer();
-  state.indices = gl::make_buffer();
-  glBindVertexArray(state.vertex_array.get());
-  glBindBuffer(GL_ARRAY_BUFFER, state.vertices.get());
-  glBufferData(GL_ARRAY_BUFFER,
-               static_cast<GLsizeiptr>(mesh.positions.size() * sizeof(Eigen::Vector3f)),
-               mesh.positions.data(), GL_STATIC_DRAW);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Eigen::Vector3f), nullptr);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, state.indices.get());
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-               static_cast<GLsizeiptr>(mesh.triangles.size() * sizeof(mesh.triangles[0])),
-               mesh.triangles.data(), GL_STATIC_DRAW);
-  glBindVertexArray(0);
+  state.buffers = gl::upload_mesh_buffers(mesh);
   gl::check_error("BopModel::upload");
   return model;
 }
@@ -273,7 +257,7 @@ cv::Mat BopDepthRenderer::render_object(const BopModel& model, const Eigen::Matr
   glClearBufferfv(GL_DEPTH, 0, &far_depth);
   glUseProgram(state.program.get());
   glUniformMatrix4fv(state.mvp, 1, GL_FALSE, mvp.data());
-  glBindVertexArray(model.state_->vertex_array.get());
+  glBindVertexArray(model.state_->buffers.vertex_array.get());
   glDrawElements(GL_TRIANGLES, model.state_->index_count, GL_UNSIGNED_INT, nullptr);
   glBindVertexArray(0);
 

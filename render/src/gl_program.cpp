@@ -73,4 +73,22 @@ void check_uploadable(const Mesh& mesh, const char* who) {
   }
 }
 
+MeshBuffers upload_mesh_buffers(const Mesh& mesh) {
+  MeshBuffers buffers{make_vertex_array(), make_buffer(), make_buffer()};
+  glBindVertexArray(buffers.vertex_array.get());
+  glBindBuffer(GL_ARRAY_BUFFER, buffers.vertices.get());
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
+  glBufferData(GL_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(mesh.positions.size() * sizeof(Eigen::Vector3f)),
+               mesh.positions.data(), GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Eigen::Vector3f), nullptr);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, buffers.indices.get());
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(mesh.triangles.size() * sizeof(mesh.triangles[0])),
+               mesh.triangles.data(), GL_STATIC_DRAW);
+  glBindVertexArray(0);
+  return buffers;
+}
+
 }  // namespace clutterscope::render::gl

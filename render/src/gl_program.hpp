@@ -12,6 +12,15 @@ namespace clutterscope::render::gl {
 // triangles, too large for one draw, or with an index out of range; `who` names the caller.
 void check_uploadable(const Mesh& mesh, const char* who);
 
+// A mesh's positions (attribute 0, vec3) and triangles (the element buffer) on the GPU, bound
+// through one vertex array. Call check_uploadable first.
+struct MeshBuffers {
+  VertexArray vertex_array;
+  Buffer vertices;
+  Buffer indices;
+};
+MeshBuffers upload_mesh_buffers(const Mesh& mesh);
+
 // Compiles and links a vertex + fragment program. Throws RenderError with `what` and the
 // driver's log when either step fails.
 Program link_program(const char* vertex_source, const char* fragment_source, const char* what);

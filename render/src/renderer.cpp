@@ -335,9 +335,7 @@ std::vector<cv::Rect> pack_tiles(const std::vector<cv::Size>& sizes, int max_siz
 // GpuMesh
 
 struct GpuMesh::State {
-  gl::VertexArray vertex_array;
-  gl::Buffer vertices;
-  gl::Buffer indices;
+  gl::MeshBuffers buffers;
   gl::Buffer planes;           // per triangle: model-frame unit normal and offset (RGBA32F)
   gl::Texture planes_texture;  // texture-buffer view of `planes`
   GLsizei index_count = 0;
@@ -395,22 +393,7 @@ GpuMesh GpuMesh::upload(const Mesh& mesh) {
   state.bounds = mesh.bounds();
   state.triangle_count = mesh.triangles.size();
   state.index_count = static_cast<GLsizei>(mesh.triangles.size() * 3);
-  state.vertex_array = gl::make_vertex_array();
-  state.vertices = gl::make_buffer();
-  state.indices = gl::make_buffer();
-  glBindVertexArray(state.vertex_array.get());
-  glBindBuffer(GL_ARRAY_BUFFER, state.vertices.get());
-  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
-  glBufferData(GL_ARRAY_BUFFER,
-               static_cast<GLsizeiptr>(mesh.positions.size() * sizeof(Eigen::Vector3f)),
-               mesh.positions.data(), GL_STATIC_DRAW);
-  glEnableVertexAttribArray(0);
-  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Eigen::Vector3f), nullptr);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, state.indices.get());
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-               static_cast<GLsizeiptr>(mesh.triangles.size() * sizeof(mesh.triangles[0])),
-               mesh.triangles.data(), GL_STATIC_DRAW);
-  glBindVertexArray(0);
+  state.buffers = gl::upload_mesh_buffers(mesh);
 
   state.closed_orientation = closed_orientation(mesh);
   state.triangles.assign(mesh.triangles.begin(), mesh.triangles.end());
@@ -564,7 +547,7 @@ struct Renderer::State {
                           " triangles exceeds this driver's GL_MAX_TEXTURE_BUFFER_SIZE, needed "
                           "by DepthMode::kExactPerTile; decimate it or use kInterpolated");
       }
-      glBindVertexArray(mesh->vertex_array.get());
+      glBindVertexArray(mesh->buffers.vertex_array.get());
       glBindTexture(GL_TEXTURE_BUFFER, mesh->planes_texture.get());  // unit 0
       *bound_mesh = mesh;
     }
@@ -815,7 +798,7 @@ TileAtlas Renderer::render_tiles(const std::vector<TileRequest>& requests,
           GL_TRIANGLES, static_cast<GLsizei>(run.index_count), GL_UNSIGNED_INT,
           reinterpret_cast<const void*>(run.first_index * sizeof(std::uint32_t)),
           static_cast<GLsizei>(run.count));
-      glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, geometry.indices.get());
+      glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, geometry.buffers.indices.get());
       triangles = run.index_count / 3;
     } else {
       glDrawElementsInstanced(GL_TRIANGLES, geometry.index_count, GL_UNSIGNED_INT, nullptr,
