@@ -6,6 +6,8 @@
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/mesh.hpp>
+#include <cctype>
+#include <iterator>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -16,6 +18,9 @@
 #include <string>
 #include <system_error>
 #include <unordered_map>
+
+#include "mesh_checks.hpp"
+#include "ply_reader.hpp"
 
 namespace clutterscope::render {
 
@@ -37,16 +42,32 @@ Mesh load_mesh(const std::filesystem::path& path, const MeshLoadOptions& options
   if (std::filesystem::is_directory(path, error)) {
     throw datasets::DatasetError(path, "model path is a directory, expected a mesh file");
   }
-  if (std::filesystem::file_size(path, error) == 0) {
-    throw datasets::DatasetError(path, "model file is empty");
+  std::string bytes;
+  {
+    std::ifstream file(path, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(file), {});
+    if (file.bad() || !file.is_open()) throw datasets::DatasetError(path, "cannot read model file");
   }
+  if (bytes.empty()) throw datasets::DatasetError(path, "model file is empty");
+  const float scale = static_cast<float>(options.scale_to_metres);
+
+  // PLY, the BOP format, is read by our own reader; OBJ and STL reach assimp only after the
+  // checks that make its parsers safe; other formats go to assimp as they are.
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (detail::is_ply(bytes)) return detail::read_ply(path, bytes, scale);
+  if (extension == ".ply") throw datasets::DatasetError(path, "not a PLY file (no 'ply' line)");
+  if (extension == ".obj") detail::check_obj(path, bytes);
+  if (extension == ".stl") detail::check_stl(path, bytes);
 
   Assimp::Importer importer;
   // Drop points and lines; keep only triangles after triangulation.
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
                               aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   const aiScene* scene =
-      importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_PreTransformVertices |
+      importer.ReadFile(path.string(), aiProcess_ValidateDataStructure | aiProcess_Triangulate |
+                                           aiProcess_PreTransformVertices |
                                            aiProcess_SortByPType | aiProcess_GenSmoothNormals);
   if (scene == nullptr) {
     throw datasets::DatasetError(path,
@@ -54,7 +75,6 @@ Mesh load_mesh(const std::filesystem::path& path, const MeshLoadOptions& options
   }
 
   Mesh mesh;
-  const float scale = static_cast<float>(options.scale_to_metres);
   bool all_have_normals = true;
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* part = scene->mMeshes[m];
