@@ -444,6 +444,8 @@ class NgonEncoder {
     }
     last_ = a[0];
   }
+  // A fanned polygon (assimp ear-cuts these; its own triangles are not reproduced).
+  void polygon(std::uint32_t fan_corner) { last_ = fan_corner; }
 
  private:
   std::uint32_t last_ = std::numeric_limits<std::uint32_t>::max();
@@ -598,10 +600,9 @@ Mesh read_ply(const std::filesystem::path& path, std::string_view bytes, float s
                     " vertices (triangulate the model)");
       }
       for (std::size_t k = 1; k + 1 < n; ++k) {
-        std::array<std::uint32_t, 3> t = {face[0], face[k], face[k + 1]};
-        encoder.triangle(t);
-        triangles.push_back(t);
+        triangles.push_back({face[0], face[k], face[k + 1]});
       }
+      encoder.polygon(face[0]);
     }
   }
   if (triangles.empty()) parser.fail("model has no triangles");

@@ -210,7 +210,16 @@ TEST_F(PlyFiles, BinaryBodyTruncatedIsRefusedNamingTheRecord) {
       << message;
   // A cut among the faces (variable-size lists) is found reading them.
   message = error_of(valid.substr(0, valid.size() - 7));
-  EXPECT_NE(message.find("face 799: file ends inside the record"), std::string::npos) << message;
+  EXPECT_NE(message.find("face 799: list vertex_indices of 3 items is longer than the rest of "
+                         "the file (5 bytes)"),
+            std::string::npos)
+      << message;
+  // An ascii file cut before its last record.
+  const std::string ascii = kAsciiQuad;
+  message = error_of(ascii.substr(0, ascii.find("0.5\n")));
+  EXPECT_NE(message.find("material 0: file ends inside the record (property shininess)"),
+            std::string::npos)
+      << message;
 }
 
 TEST_F(PlyFiles, HeaderTruncatedIsRefusedAtOnce) {

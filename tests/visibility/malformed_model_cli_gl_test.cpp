@@ -81,7 +81,7 @@ TEST_F(MalformedModelCli, ExitsThreeNamingTheFileAndKeepGoingCompletesTheOtherIm
   huge_counts.replace(huge_counts.find("element vertex 802"), 18, "element vertex 80200000");
   const std::vector<Case> cases = {
       {"binary body truncated among the faces", valid.substr(0, valid.size() - 10),
-       "face 799: file ends inside the record"},
+       "face 799: list vertex_indices of 3 items is longer than the rest of the file"},
       {"binary body truncated among the vertices", valid.substr(0, body + 5000),
        "header: element vertex 802 needs 19248 bytes, file body has 5000 bytes"},
       {"header truncated", valid.substr(0, body - 8), "file ends inside the header"},
