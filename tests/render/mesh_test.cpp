@@ -99,6 +99,58 @@ TEST_F(MeshFiles, AsciiStlLoads) {
   EXPECT_NEAR(mesh.bounds().max().y(), 0.010, 1e-8);
 }
 
+// OBJ and STL reach assimp only after checks; each refusal names the file and the line.
+TEST_F(MeshFiles, MalformedObjAndStlAreRefusedBeforeAssimp) {
+  const auto message_of = [&](const std::string& name, const std::string& contents) {
+    try {
+      load_mesh(write(name, contents));
+    } catch (const datasets::DatasetError& error) {
+      EXPECT_EQ(error.file(), dir_ / name);
+      return std::string(error.what());
+    }
+    ADD_FAILURE() << name << ": no DatasetError";
+    return std::string();
+  };
+  const std::string square = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\n";
+  EXPECT_NE(message_of("a.obj", square + "f 1 2 9\n").find("line 6: vertex index 9 out of range (4 vertices)"),
+            std::string::npos);
+  EXPECT_NE(message_of("b.obj", square + "f 1 2 -5\n").find("line 6: vertex index -5 out of range"),
+            std::string::npos);
+  EXPECT_NE(message_of("c.obj", square + "f 1/1 2/2 3/1\n")
+                .find("line 6: texture coordinate index 2 out of range (1 texture coordinates)"),
+            std::string::npos);
+  EXPECT_NE(message_of("d.obj", square + "f 1//3 2//1 3//1\n").find("normal index 3 out of range"),
+            std::string::npos);
+  EXPECT_NE(message_of("e.obj", "v 0 nan 0\n" + square + "f 1 2 3\n")
+                .find("line 1: vertex coordinate 'nan' is not a finite number"),
+            std::string::npos);
+  EXPECT_NE(message_of("f.obj", square + "f 1 x 3\n").find("line 6: 'x' is not a valid face corner"),
+            std::string::npos);
+  EXPECT_NE(message_of("g.obj", std::string(70000, '#') + "\n").find("line 1: longer than"),
+            std::string::npos);
+  // Relative indices within range load.
+  EXPECT_EQ(load_mesh(write("h.obj", square + "f -4 -3 -2\n")).triangle_count(), 1u);
+
+  // Binary STL: 84 + 50 bytes per triangle, exactly.
+  std::string stl(84 + 50, '\0');
+  stl[80] = 1;
+  EXPECT_NE(message_of("a.stl", stl.substr(0, 120))
+                .find("binary STL of 120 bytes, expected 134 (84 + 50 x 1 triangles)"),
+            std::string::npos);
+  stl[80] = 7;
+  EXPECT_NE(message_of("b.stl", stl).find("expected 434"), std::string::npos);
+  EXPECT_NE(message_of("c.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n"
+                                "vertex 1 0 0\nendloop\nendfacet\nendsolid t\n")
+                .find("line 7: facet with 2 vertices, expected 3"),
+            std::string::npos);
+  EXPECT_NE(message_of("d.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 inf\n")
+                .find("line 4: vertex coordinate 'inf' is not a finite number"),
+            std::string::npos);
+  EXPECT_NE(message_of("e.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n")
+                .find("file ends inside a facet"),
+            std::string::npos);
+}
+
 std::string base64(const std::string& bytes) {
   static const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   std::string out;
