@@ -212,9 +212,12 @@ class VisibilityWorker {
     try {
       return render::load_mesh(model.mesh_path, {scale_to_metres});
     } catch (const datasets::DatasetError& error) {
+      std::string what = error.what();  // named once: drop the file before the reason
+      const std::string prefix = error.file().string() + ": ";
+      if (!error.file().empty() && what.rfind(prefix, 0) == 0) what = what.substr(prefix.size());
       throw datasets::DatasetError(
           model.mesh_path,
-          where + "model of obj_id " + std::to_string(obj_id) + " cannot be used: " + error.what());
+          where + "model of obj_id " + std::to_string(obj_id) + " cannot be used: " + what);
     }
   }
 
