@@ -3,15 +3,15 @@
 
 #include <algorithm>
 #include <assimp/Importer.hpp>
+#include <cctype>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/mesh.hpp>
-#include <cctype>
-#include <iterator>
 #include <cmath>
 #include <cstring>
 #include <fstream>
 #include <initializer_list>
+#include <iterator>
 #include <limits>
 #include <queue>
 #include <sstream>
@@ -42,6 +42,9 @@ Mesh load_mesh(const std::filesystem::path& path, const MeshLoadOptions& options
   if (std::filesystem::is_directory(path, error)) {
     throw datasets::DatasetError(path, "model path is a directory, expected a mesh file");
   }
+  if (!std::filesystem::is_regular_file(path, error)) {
+    throw datasets::DatasetError(path, "model path is not a regular file");
+  }
   std::string bytes;
   {
     std::ifstream file(path, std::ios::binary);
@@ -67,8 +70,8 @@ Mesh load_mesh(const std::filesystem::path& path, const MeshLoadOptions& options
                               aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   const aiScene* scene =
       importer.ReadFile(path.string(), aiProcess_ValidateDataStructure | aiProcess_Triangulate |
-                                           aiProcess_PreTransformVertices |
-                                           aiProcess_SortByPType | aiProcess_GenSmoothNormals);
+                                           aiProcess_PreTransformVertices | aiProcess_SortByPType |
+                                           aiProcess_GenSmoothNormals);
   if (scene == nullptr) {
     throw datasets::DatasetError(path,
                                  std::string("cannot read model: ") + importer.GetErrorString());

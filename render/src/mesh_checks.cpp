@@ -59,11 +59,13 @@ void check_obj(const std::filesystem::path& path, std::string_view bytes) {
     if (tokens.empty()) return;
     const std::string where = "line " + std::to_string(number) + ": ";
     if (tokens[0] == "v") {
-      if (tokens.size() < 4) throw datasets::DatasetError(path, where + "vertex with fewer than 3 coordinates");
+      if (tokens.size() < 4)
+        throw datasets::DatasetError(path, where + "vertex with fewer than 3 coordinates");
       for (std::size_t k = 1; k < tokens.size(); ++k) {
         if (!finite_number(tokens[k])) {
-          throw datasets::DatasetError(path, where + "vertex coordinate '" + std::string(tokens[k]) +
-                                                 "' is not a finite number");
+          throw datasets::DatasetError(
+              path,
+              where + "vertex coordinate '" + std::string(tokens[k]) + "' is not a finite number");
         }
       }
       ++totals[0];
@@ -95,15 +97,15 @@ void check_obj(const std::filesystem::path& path, std::string_view bytes) {
         std::int64_t index = 0;
         const auto [ptr, ec] = std::from_chars(field.data(), field.data() + field.size(), index);
         if (ec != std::errc() || ptr != field.data() + field.size() || index == 0) {
-          throw datasets::DatasetError(path, where + "'" + std::string(tokens[k]) +
-                                                 "' is not a valid face corner");
+          throw datasets::DatasetError(
+              path, where + "'" + std::string(tokens[k]) + "' is not a valid face corner");
         }
         const std::int64_t resolved = index < 0 ? seen[slot] + index + 1 : index;
         if (resolved < 1 || resolved > totals[slot]) {
           throw datasets::DatasetError(
               path, where + kinds[slot] + " index " + std::to_string(index) + " out of range (" +
-                        std::to_string(index < 0 ? seen[slot] : totals[slot]) + " " + plurals[slot] +
-                        ")");
+                        std::to_string(index < 0 ? seen[slot] : totals[slot]) + " " +
+                        plurals[slot] + ")");
         }
       }
     }
@@ -126,8 +128,8 @@ void check_stl(const std::filesystem::path& path, std::string_view bytes) {
       expected = std::to_string(84 + 50 * std::uint64_t{triangles}) + " (84 + 50 x " +
                  std::to_string(triangles) + " triangles)";
     }
-    throw datasets::DatasetError(path, "binary STL of " + std::to_string(bytes.size()) +
-                                           " bytes, expected " + expected);
+    throw datasets::DatasetError(
+        path, "binary STL of " + std::to_string(bytes.size()) + " bytes, expected " + expected);
   }
   int vertices_in_facet = -1;  // -1: outside a facet
   for_each_line(path, bytes, [&](std::size_t number, std::string_view line) {
@@ -137,19 +139,23 @@ void check_stl(const std::filesystem::path& path, std::string_view bytes) {
     if (tokens[0] == "facet") {
       vertices_in_facet = 0;
     } else if (tokens[0] == "vertex") {
-      if (tokens.size() != 4) throw datasets::DatasetError(path, where + "vertex needs 3 coordinates");
+      if (tokens.size() != 4)
+        throw datasets::DatasetError(path, where + "vertex needs 3 coordinates");
       for (std::size_t k = 1; k < 4; ++k) {
         if (!finite_number(tokens[k])) {
-          throw datasets::DatasetError(path, where + "vertex coordinate '" + std::string(tokens[k]) +
-                                                 "' is not a finite number");
+          throw datasets::DatasetError(
+              path,
+              where + "vertex coordinate '" + std::string(tokens[k]) + "' is not a finite number");
         }
       }
-      if (vertices_in_facet < 0) throw datasets::DatasetError(path, where + "vertex outside a facet");
+      if (vertices_in_facet < 0)
+        throw datasets::DatasetError(path, where + "vertex outside a facet");
       ++vertices_in_facet;
     } else if (tokens[0] == "endfacet") {
       if (vertices_in_facet != 3) {
-        throw datasets::DatasetError(path, where + "facet with " + std::to_string(vertices_in_facet) +
-                                               " vertices, expected 3");
+        throw datasets::DatasetError(
+            path,
+            where + "facet with " + std::to_string(vertices_in_facet) + " vertices, expected 3");
       }
       vertices_in_facet = -1;
     }

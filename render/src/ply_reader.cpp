@@ -53,7 +53,7 @@ bool is_integer(Type type) { return type != Type::kFloat32 && type != Type::kFlo
 
 struct Property {
   std::string name;
-  Type type = Type::kFloat32;       // the value type; for a list, its items
+  Type type = Type::kFloat32;      // the value type; for a list, its items
   std::optional<Type> count_type;  // set for lists
 };
 
@@ -86,7 +86,9 @@ class PlyParser {
   PlyParser(const std::filesystem::path& path, std::string_view bytes)
       : path_(path), bytes_(bytes) {}
 
-  [[noreturn]] void fail(const std::string& what) const { throw datasets::DatasetError(path_, what); }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw datasets::DatasetError(path_, what);
+  }
 
   Header parse_header() {
     Header header;
@@ -95,8 +97,7 @@ class PlyParser {
     for (int line_number = 1;; ++line_number) {
       const std::string where = "header line " + std::to_string(line_number) + ": ";
       if (offset >= kPlyMaxHeaderBytes) {
-        fail("header: no end_header in the first " + std::to_string(kPlyMaxHeaderBytes) +
-             " bytes");
+        fail("header: no end_header in the first " + std::to_string(kPlyMaxHeaderBytes) + " bytes");
       }
       const std::size_t end = bytes_.find('\n', offset);
       if (end == std::string_view::npos) {
@@ -203,9 +204,9 @@ class PlyParser {
             element.count > std::numeric_limits<std::uint64_t>::max() / per_record
                 ? "more than " + std::to_string(std::numeric_limits<std::uint64_t>::max())
                 : std::to_string(element.count * per_record);
-        fail("header: element " + element.name + " " + std::to_string(element.count) +
-             " needs " + (ascii ? "at least " + needed + " numbers" : needed + " bytes") +
-             ", file body has " + std::to_string(left) + (used > 0 ? " bytes left" : " bytes"));
+        fail("header: element " + element.name + " " + std::to_string(element.count) + " needs " +
+             (ascii ? "at least " + needed + " numbers" : needed + " bytes") + ", file body has " +
+             std::to_string(left) + (used > 0 ? " bytes left" : " bytes"));
       }
       used += element.count * per_record;
     }
@@ -287,7 +288,8 @@ class PlyParser {
     const auto n = static_cast<std::uint64_t>(count);
     const std::uint64_t left = bytes_.size() - position_;
     // Binary: each item takes its size; ascii: a number and a separator.
-    const std::uint64_t most = format_ == Format::kAscii ? left / 2 + 1 : left / size_of(property.type);
+    const std::uint64_t most =
+        format_ == Format::kAscii ? left / 2 + 1 : left / size_of(property.type);
     if (n > most) {
       fail(where() + "list " + property.name + " of " + std::to_string(n) +
            " items is longer than the rest of the file (" + std::to_string(left) + " bytes)");
@@ -315,7 +317,8 @@ class PlyParser {
     while (position_ < bytes_.size() && is_space(bytes_[position_])) ++position_;
     const std::size_t start = position_;
     while (position_ < bytes_.size() && !is_space(bytes_[position_])) ++position_;
-    if (position_ == start) fail(where() + "file ends inside the record (property " + property + ")");
+    if (position_ == start)
+      fail(where() + "file ends inside the record (property " + property + ")");
     return bytes_.substr(start, position_ - start);
   }
 
@@ -517,10 +520,10 @@ Mesh read_ply(const std::filesystem::path& path, std::string_view bytes, float s
         double values[9] = {};
         for (std::size_t p = 0; p < element.properties.size(); ++p) {
           const Property& property = element.properties[p];
-          const int slot = static_cast<int>(p) == xyz[0]   ? 0
-                           : static_cast<int>(p) == xyz[1] ? 1
-                           : static_cast<int>(p) == xyz[2] ? 2
-                           : !has_normals                  ? -1
+          const int slot = static_cast<int>(p) == xyz[0]    ? 0
+                           : static_cast<int>(p) == xyz[1]  ? 1
+                           : static_cast<int>(p) == xyz[2]  ? 2
+                           : !has_normals                   ? -1
                            : static_cast<int>(p) == nxyz[0] ? 3
                            : static_cast<int>(p) == nxyz[1] ? 4
                            : static_cast<int>(p) == nxyz[2] ? 5

@@ -112,7 +112,8 @@ TEST_F(MeshFiles, MalformedObjAndStlAreRefusedBeforeAssimp) {
     return std::string();
   };
   const std::string square = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\n";
-  EXPECT_NE(message_of("a.obj", square + "f 1 2 9\n").find("line 6: vertex index 9 out of range (4 vertices)"),
+  EXPECT_NE(message_of("a.obj", square + "f 1 2 9\n")
+                .find("line 6: vertex index 9 out of range (4 vertices)"),
             std::string::npos);
   EXPECT_NE(message_of("b.obj", square + "f 1 2 -5\n").find("line 6: vertex index -5 out of range"),
             std::string::npos);
@@ -124,8 +125,9 @@ TEST_F(MeshFiles, MalformedObjAndStlAreRefusedBeforeAssimp) {
   EXPECT_NE(message_of("e.obj", "v 0 nan 0\n" + square + "f 1 2 3\n")
                 .find("line 1: vertex coordinate 'nan' is not a finite number"),
             std::string::npos);
-  EXPECT_NE(message_of("f.obj", square + "f 1 x 3\n").find("line 6: 'x' is not a valid face corner"),
-            std::string::npos);
+  EXPECT_NE(
+      message_of("f.obj", square + "f 1 x 3\n").find("line 6: 'x' is not a valid face corner"),
+      std::string::npos);
   EXPECT_NE(message_of("g.obj", std::string(70000, '#') + "\n").find("line 1: longer than"),
             std::string::npos);
   // Relative indices within range load.
@@ -139,8 +141,9 @@ TEST_F(MeshFiles, MalformedObjAndStlAreRefusedBeforeAssimp) {
             std::string::npos);
   stl[80] = 7;
   EXPECT_NE(message_of("b.stl", stl).find("expected 434"), std::string::npos);
-  EXPECT_NE(message_of("c.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n"
-                                "vertex 1 0 0\nendloop\nendfacet\nendsolid t\n")
+  EXPECT_NE(message_of("c.stl",
+                       "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n"
+                       "vertex 1 0 0\nendloop\nendfacet\nendsolid t\n")
                 .find("line 7: facet with 2 vertices, expected 3"),
             std::string::npos);
   EXPECT_NE(message_of("d.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 inf\n")

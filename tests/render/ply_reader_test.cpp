@@ -183,11 +183,12 @@ TEST_F(PlyFiles, ConvexPentagonIsFannedAndConcaveRefused) {
   const std::string header =
       "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\n"
       "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
-  const Mesh mesh =
-      load_mesh(write("pentagon.ply", header + "0 0 0\n2 0 0\n3 1 0\n1 2 0\n-1 1 0\n5 0 1 2 3 4\n"));
+  const Mesh mesh = load_mesh(
+      write("pentagon.ply", header + "0 0 0\n2 0 0\n3 1 0\n1 2 0\n-1 1 0\n5 0 1 2 3 4\n"));
   const std::vector<Triangle> triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}};
   EXPECT_EQ(mesh.triangles, triangles);
-  const std::string message = error_of(header + "0 0 0\n2 0 0\n1 0.2 0\n1 2 0\n-1 1 0\n5 0 1 2 3 4\n");
+  const std::string message =
+      error_of(header + "0 0 0\n2 0 0\n1 0.2 0\n1 2 0\n-1 1 0\n5 0 1 2 3 4\n");
   EXPECT_NE(message.find("face 0: concave polygon of 5 vertices"), std::string::npos) << message;
 }
 
@@ -284,8 +285,9 @@ TEST_F(PlyFiles, CountsLargerThanTheFileAreRefusedBeforeAllocating) {
 
 TEST_F(PlyFiles, MalformedHeadersAreRefused) {
   const std::string head = "ply\nformat ascii 1.0\n";
-  EXPECT_NE(error_of(head + std::string(5000, 'c') + "\nend_header\n").find("header line 3: longer"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of(head + std::string(5000, 'c') + "\nend_header\n").find("header line 3: longer"),
+      std::string::npos);
   std::string comments;
   while (comments.size() < (1u << 20)) comments += "comment " + std::string(100, 'x') + "\n";
   EXPECT_NE(error_of(head + comments + "end_header\n").find("no end_header in the first"),
@@ -295,11 +297,13 @@ TEST_F(PlyFiles, MalformedHeadersAreRefused) {
             std::string::npos);
   EXPECT_NE(error_of("ply\nformat binary_middle_endian 1.0\nend_header\n").find("unknown format"),
             std::string::npos);
-  EXPECT_NE(error_of(head + "element vertex 1\nproperty float x\nproperty float y\nend_header\n0 0\n")
-                .find("no scalar property z"),
-            std::string::npos);
-  EXPECT_NE(error_of(head + "element vertex -3\nend_header\n").find("is not a non-negative integer"),
-            std::string::npos);
+  EXPECT_NE(
+      error_of(head + "element vertex 1\nproperty float x\nproperty float y\nend_header\n0 0\n")
+          .find("no scalar property z"),
+      std::string::npos);
+  EXPECT_NE(
+      error_of(head + "element vertex -3\nend_header\n").find("is not a non-negative integer"),
+      std::string::npos);
   EXPECT_NE(error_of(head + "element vertex 0\nelement edge 5\nend_header\n1 2 3 4 5\n")
                 .find("element edge has 5 records but no properties"),
             std::string::npos);
@@ -360,11 +364,10 @@ void expect_same_as_assimp(const fs::path& path, bool file_has_normals) {
 
 TEST_F(PlyFiles, SameMeshAsAssimpForTheBundledModels) {
   std::vector<fs::path> models;
-  for (const fs::path& dir :
-       {fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray6" / "models",
-        fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray10" / "models",
-        fs::path(CLUTTERSCOPE_SAMPLES_DIR) / ".." / ".." / "tests" / "visibility" / "data" /
-            "bop_toolkit_reference" / "models"}) {
+  for (const fs::path& dir : {fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray6" / "models",
+                              fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray10" / "models",
+                              fs::path(CLUTTERSCOPE_SAMPLES_DIR) / ".." / ".." / "tests" /
+                                  "visibility" / "data" / "bop_toolkit_reference" / "models"}) {
     for (const auto& entry : fs::directory_iterator(dir)) {
       if (entry.path().extension() == ".ply") models.push_back(entry.path());
     }

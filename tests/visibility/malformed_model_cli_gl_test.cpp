@@ -99,8 +99,8 @@ TEST_F(MalformedModelCli, ExitsThreeNamingTheFileAndKeepGoingCompletesTheOtherIm
     write_text(data / kModel, cases[c].model);
 
     const auto start = std::chrono::steady_clock::now();
-    const CommandRun run = run_clutterscope("visibility " + quoted(data) + " -q --out " +
-                                            quoted(data / "out"));
+    const CommandRun run =
+        run_clutterscope("visibility " + quoted(data) + " -q --out " + quoted(data / "out"));
     EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(30));
     EXPECT_FALSE(run.signalled);
     EXPECT_EQ(run.exit_code, 3) << run.errors;

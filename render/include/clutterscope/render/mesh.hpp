@@ -28,8 +28,13 @@ struct MeshLoadOptions {
 };
 
 // Loads PLY (as in BOP), OBJ, STL, glTF and anything else assimp reads; all meshes of the file
-// are merged. Throws datasets::DatasetError naming the file for a missing, unreadable or empty
-// model.
+// are merged. PLY is read by a hardened reader of our own (header counts checked against the
+// file size before anything is allocated, every record bounds-checked, vertex indices in range,
+// finite coordinates; the same mesh as assimp for valid files). OBJ and STL are checked before
+// assimp parses them (OBJ: bounded lines, finite vertices, every face index in range; STL:
+// binary size 84 + 50 n, or well-formed ASCII facets); other formats go to assimp as they are,
+// with its data-structure validation. Throws datasets::DatasetError naming the file (and the
+// element, record or line) for a missing, unreadable, empty or malformed model.
 Mesh load_mesh(const std::filesystem::path& path, const MeshLoadOptions& options = {});
 
 // The mesh's vertices merged by exact position (-0 and +0 alike): meshes often duplicate
