@@ -67,11 +67,23 @@ std::vector<fs::path> stale_staging_folders(const fs::path& out) {
     const bool ours = owner.is_object() && owner.contains("host") && owner.contains("pid") &&
                       owner["host"] == host_name() && owner["pid"] == pid;
     if (!ours) continue;
-    if (pid == ::getpid() || (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)) {
+    if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
       stale.push_back(entry->path());
     }
   }
   return stale;
+}
+
+// Writes the incomplete-dataset marker into `folder`: the command, and the output, process
+// and host it belongs to (stale_staging_folders reads the last two).
+void write_marker(const fs::path& folder, const fs::path& out) {
+  datasets::write_file_atomically(folder / datasets::kIncompleteDatasetMarker,
+                                  nlohmann::json({{"command", "clutterscope generate"},
+                                                  {"out", out.string()},
+                                                  {"pid", static_cast<long>(::getpid())},
+                                                  {"host", host_name()}})
+                                          .dump(2) +
+                                      "\n");
 }
 
 // Removes the staging folder unless the dataset was moved into place: a failed run leaves
@@ -126,7 +138,14 @@ void move_into_place(StagingFolder& staging, const fs::path& out) {
     return;
   }
   if (::renameat2(AT_FDCWD, staging.path().c_str(), AT_FDCWD, out.c_str(), RENAME_EXCHANGE) == 0) {
-    return;  // staging now holds the old dataset; its destructor deletes it
+    // Staging now holds the old dataset and its destructor deletes it; marked, so that the
+    // next run removes what a kill during the deletion leaves.
+    try {
+      write_marker(staging.path(), out);
+    } catch (const datasets::WriteError&) {
+      // The new dataset is in place; the old one is deleted all the same.
+    }
+    return;
   }
   if (errno != EINVAL && errno != ENOSYS) datasets::throw_write_error(out, errno);
   // No exchange on this file system: the old dataset steps aside first, then is deleted.
@@ -204,22 +223,18 @@ GenerateSummary generate_dataset(const GenerateOptions& options) {
     std::error_code ignored;
     fs::remove_all(stale, ignored);
   }
+  // A folder of this name is a dead process's (this PID is ours now): never build on it.
   StagingFolder staging(staging_folder(out, ::getpid()));
+  std::error_code error;
+  fs::remove_all(staging.path(), error);
   datasets::create_folders(staging.path());
   // The marker goes in first and comes out last: a folder a killed run leaves is recognisable,
   // and readers refuse it.
+  write_marker(staging.path(), out);
   const fs::path marker = staging.path() / datasets::kIncompleteDatasetMarker;
-  datasets::write_file_atomically(
-      marker, nlohmann::json({{"command", "clutterscope generate"},
-                              {"out", out.string()},
-                              {"pid", static_cast<long>(::getpid())},
-                              {"host", host_name()}})
-                      .dump(2) +
-                  "\n");
   GenerateOptions staged = options;
   staged.out = staging.path();
   const GenerateSummary summary = write_dataset(staged, catalogue);
-  std::error_code error;
   fs::remove(marker, error);
   if (error) datasets::throw_write_error(marker, error.value());
   move_into_place(staging, out);
