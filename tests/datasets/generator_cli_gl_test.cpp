@@ -376,6 +376,12 @@ TEST_F(GeneratorCli, WriteFailuresExit4NamingTheFile) {
       << visibility.output;
   EXPECT_TRUE(contains(visibility.output, ": File too large")) << visibility.output;
 
+  const CommandRun visibility_under_file = run_merged("visibility " + quoted(dataset) +
+                                                      " --quiet --out " + quoted(plain / "v"));
+  EXPECT_EQ(visibility_under_file.exit_code, 4) << visibility_under_file.output;
+  EXPECT_TRUE(contains(visibility_under_file.output, "cannot write " + (plain / "v").string()))
+      << visibility_under_file.output;
+
   const CommandRun render = run_with_file_size_limit(
       "render " + quoted(dataset) + " --scene 0 --image 0 --out " + quoted(*root_ / "render"));
   EXPECT_EQ(render.exit_code, 4) << render.output;

@@ -199,7 +199,7 @@ BatchFolder BatchFolder::prepare(const fs::path& out_dir, const std::string& com
     }
     return existing;
   }
-  fs::create_directories(batch_dir(out_dir));
+  datasets::create_folders(batch_dir(out_dir));
   // items.tsv first: a job.json always has its item list next to it.
   write_text_atomically(items_path(out_dir), items_tsv);
   write_json_atomically(job_path(out_dir),
@@ -226,7 +226,7 @@ BatchFolder BatchFolder::prepare_like(const fs::path& out_dir, const BatchFolder
     existing.require_same_job(source);
     return existing;
   }
-  fs::create_directories(batch_dir(out_dir));
+  datasets::create_folders(batch_dir(out_dir));
   copy_file_atomically(items_path(source.root_), items_path(out_dir));
   write_json_atomically(job_path(out_dir),
                         {{"format", kFormatVersion}, {"fingerprint", source.fingerprint_}});
