@@ -234,8 +234,8 @@ BopDataset BopDataset::open(const fs::path& root, const BopOpenOptions& options)
   if (fs::exists(root / kIncompleteDatasetMarker, error)) {
     throw DatasetError("", root.string() +
                                " is an incomplete dataset left by an interrupted `clutterscope "
-                               "generate` (" + (root / kIncompleteDatasetMarker).string() +
-                               "); re-run generate");
+                               "generate` (" +
+                               (root / kIncompleteDatasetMarker).string() + "); re-run generate");
   }
 
   BopDataset dataset;

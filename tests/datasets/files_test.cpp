@@ -70,8 +70,8 @@ TEST(WriteErrors, FileSizeLimitIsAWriteErrorAndLeavesNoTemporaryFile) {
     try {
       write_file_atomically(target, std::string(1 << 16, 'x'));
     } catch (const WriteError& error) {
-      const bool named = std::string(error.what()) ==
-                         "cannot write " + target.string() + ": File too large";
+      const bool named =
+          std::string(error.what()) == "cannot write " + target.string() + ": File too large";
       std::_Exit(named ? (fs::is_empty(dir.path()) ? 0 : 3) : 2);
     }
     std::_Exit(1);

@@ -9,8 +9,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <clutterscope/datasets/bop.hpp>
 #include <chrono>
+#include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/files.hpp>
 #include <clutterscope/render/context.hpp>
 #include <cstdio>
@@ -67,7 +67,8 @@ CommandRun run_with_file_size_limit(const std::string& arguments) {
   if (pipe == nullptr) return result;
   char buffer[4096];
   std::size_t read = 0;
-  while ((read = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) result.output.append(buffer, read);
+  while ((read = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0)
+    result.output.append(buffer, read);
   const int status = ::pclose(pipe);
   result.signalled = WIFSIGNALED(status);
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -336,10 +337,11 @@ TEST_F(GeneratorCli, KilledRunLeavesNoDatasetAndTheNextRunCompletes) {
   const CommandRun refused =
       run_merged("visibility " + quoted(staging) + " --quiet --out " + quoted(*root_ / "kv"));
   EXPECT_EQ(refused.exit_code, 3) << refused.output;
-  EXPECT_TRUE(contains(refused.output,
-                       staging.string() + " is an incomplete dataset left by an interrupted "
-                                          "`clutterscope generate` (" +
-                           (staging / ".clutterscope-incomplete").string() + "); re-run generate"))
+  EXPECT_TRUE(contains(refused.output, staging.string() +
+                                           " is an incomplete dataset left by an interrupted "
+                                           "`clutterscope generate` (" +
+                                           (staging / ".clutterscope-incomplete").string() +
+                                           "); re-run generate"))
       << refused.output;
 
   const CommandRun rerun = run_merged(small_dataset(out, 2));
@@ -368,16 +370,16 @@ TEST_F(GeneratorCli, WriteFailuresExit4NamingTheFile) {
   EXPECT_TRUE(staging_folders(limited).empty()) << "a failed run leaves its staging folder";
 
   const fs::path dataset = *root_ / "a";
-  const CommandRun visibility =
-      run_with_file_size_limit("visibility " + quoted(dataset) + " --quiet --out " +
-                               quoted(*root_ / "visibility_limited"));
+  const CommandRun visibility = run_with_file_size_limit(
+      "visibility " + quoted(dataset) + " --quiet --out " + quoted(*root_ / "visibility_limited"));
   EXPECT_EQ(visibility.exit_code, 4) << visibility.output;
-  EXPECT_TRUE(contains(visibility.output, "cannot write " + (*root_ / "visibility_limited").string()))
+  EXPECT_TRUE(
+      contains(visibility.output, "cannot write " + (*root_ / "visibility_limited").string()))
       << visibility.output;
   EXPECT_TRUE(contains(visibility.output, ": File too large")) << visibility.output;
 
-  const CommandRun visibility_under_file = run_merged("visibility " + quoted(dataset) +
-                                                      " --quiet --out " + quoted(plain / "v"));
+  const CommandRun visibility_under_file =
+      run_merged("visibility " + quoted(dataset) + " --quiet --out " + quoted(plain / "v"));
   EXPECT_EQ(visibility_under_file.exit_code, 4) << visibility_under_file.output;
   EXPECT_TRUE(contains(visibility_under_file.output, "cannot write " + (plain / "v").string()))
       << visibility_under_file.output;
@@ -385,13 +387,11 @@ TEST_F(GeneratorCli, WriteFailuresExit4NamingTheFile) {
   const CommandRun render = run_with_file_size_limit(
       "render " + quoted(dataset) + " --scene 0 --image 0 --out " + quoted(*root_ / "render"));
   EXPECT_EQ(render.exit_code, 4) << render.output;
-  EXPECT_TRUE(contains(render.output,
-                       "cannot write " + (*root_ / "render" / "depth.png").string() +
-                           ": File too large"))
+  EXPECT_TRUE(contains(render.output, "cannot write " + (*root_ / "render" / "depth.png").string() +
+                                          ": File too large"))
       << render.output;
-  const CommandRun render_under_file = run_merged("render " + quoted(dataset) +
-                                                  " --scene 0 --image 0 --out " +
-                                                  quoted(plain / "render"));
+  const CommandRun render_under_file = run_merged(
+      "render " + quoted(dataset) + " --scene 0 --image 0 --out " + quoted(plain / "render"));
   EXPECT_EQ(render_under_file.exit_code, 4) << render_under_file.output;
   EXPECT_TRUE(contains(render_under_file.output, "cannot write " + (plain / "render").string()))
       << render_under_file.output;

@@ -142,8 +142,7 @@ void add_generate_command(CLI::App& app, int* exit_code) {
                 << summary.objects << " object views (" << summary.fully_visible
                 << " fully visible, " << summary.partly_visible << " partly, " << summary.hidden
                 << " hidden), deepest stack " << summary.deepest_stack << ", " << summary.detections
-                << " detections in " << summary.seconds << " s; wrote " << run.out.string()
-                << "\n";
+                << " detections in " << summary.seconds << " s; wrote " << run.out.string() << "\n";
     }
     *exit_code = 0;
   });

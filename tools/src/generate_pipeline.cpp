@@ -121,9 +121,9 @@ void check_out_folder(const fs::path& out, const fs::path& as_given, bool overwr
                      "the new dataset is complete");
   }
   if (!fs::exists(out / "generator.json", error)) {
-    throw UsageError("--overwrite replaces only a dataset written by `clutterscope generate`, and " +
-                     as_given.string() +
-                     " has no generator.json: remove it yourself or choose another --out");
+    throw UsageError(
+        "--overwrite replaces only a dataset written by `clutterscope generate`, and " +
+        as_given.string() + " has no generator.json: remove it yourself or choose another --out");
   }
 }
 
@@ -149,8 +149,8 @@ void move_into_place(StagingFolder& staging, const fs::path& out) {
   }
   if (errno != EINVAL && errno != ENOSYS) datasets::throw_write_error(out, errno);
   // No exchange on this file system: the old dataset steps aside first, then is deleted.
-  const fs::path old = out.parent_path() / (out.filename().string() + ".replaced-" +
-                                            std::to_string(::getpid()));
+  const fs::path old =
+      out.parent_path() / (out.filename().string() + ".replaced-" + std::to_string(::getpid()));
   datasets::rename_checked(out, old);
   datasets::rename_checked(staging.path(), out);
   staging.moved();
