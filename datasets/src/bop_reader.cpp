@@ -2,6 +2,7 @@
 #include <cctype>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/files.hpp>
 #include <cmath>
 #include <cstdio>
 #include <list>
@@ -230,6 +231,12 @@ BopDataset BopDataset::open(const fs::path& root, const BopOpenOptions& options)
   if (!options.IsValid(&why)) throw std::invalid_argument("BopOpenOptions: " + why);
   std::error_code error;
   if (!fs::is_directory(root, error)) throw DatasetError(root, "dataset folder is missing");
+  if (fs::exists(root / kIncompleteDatasetMarker, error)) {
+    throw DatasetError("", root.string() +
+                               " is an incomplete dataset left by an interrupted `clutterscope "
+                               "generate` (" +
+                               (root / kIncompleteDatasetMarker).string() + "); re-run generate");
+  }
 
   BopDataset dataset;
   dataset.root_ = root;

@@ -1,5 +1,7 @@
+#include <cerrno>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/files.hpp>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -55,35 +57,22 @@ std::vector<unsigned char> encode_png(const cv::Mat& image, const fs::path& path
 }  // namespace
 
 void write_file_atomically(const fs::path& path, const std::string& contents) {
-  std::error_code error;
-  if (path.has_parent_path()) {
-    fs::create_directories(path.parent_path(), error);
-    if (error) {
-      throw DatasetError(
-          path, "cannot create folder " + path.parent_path().string() + ": " + error.message());
-    }
-  }
+  if (path.has_parent_path()) create_folders(path.parent_path());
   // A unique temporary name in the same folder, so the rename is atomic and concurrent
   // writers of different files never collide.
   std::random_device entropy;
   const fs::path temporary =
       path.string() + ".tmp" + std::to_string(entropy()) + std::to_string(entropy());
-  {
+  try {
     std::ofstream stream(temporary, std::ios::binary | std::ios::trunc);
-    if (!stream) throw DatasetError(path, "cannot open " + temporary.string() + " for writing");
+    if (!stream) throw_write_error(path, errno);
     stream.write(contents.data(), static_cast<std::streamsize>(contents.size()));
-    stream.flush();
-    if (!stream) {
-      stream.close();
-      fs::remove(temporary, error);
-      throw DatasetError(path, "writing failed (disk full?)");
-    }
-  }
-  fs::rename(temporary, path, error);
-  if (error) {
+    close_checked(stream, path);
+    rename_checked(temporary, path);
+  } catch (...) {
     std::error_code ignored;
     fs::remove(temporary, ignored);
-    throw DatasetError(path, "cannot rename the temporary file into place: " + error.message());
+    throw;
   }
 }
 

@@ -1,6 +1,8 @@
 #include <algorithm>
+#include <cerrno>
 #include <clutterscope/datasets/detector.hpp>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/files.hpp>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -121,9 +123,9 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
 
 DetectionsWriter::DetectionsWriter(std::filesystem::path path)
     : path_(std::move(path)), temporary_(path_.string() + ".partial") {
-  if (path_.has_parent_path()) std::filesystem::create_directories(path_.parent_path());
+  if (path_.has_parent_path()) create_folders(path_.parent_path());
   stream_.open(temporary_, std::ios::binary | std::ios::trunc);
-  if (!stream_) throw DatasetError(temporary_, "cannot open for writing");
+  if (!stream_) throw_write_error(temporary_, errno);
   stream_ << "[";
 }
 
@@ -147,14 +149,13 @@ void DetectionsWriter::add(int scene_id, int im_id, const std::vector<Detection>
     stream_ << (count_ == 0 ? "\n  " : ",\n  ") << entry.dump();
     ++count_;
   }
-  if (!stream_) throw DatasetError(temporary_, "write failed");
+  if (!stream_) throw_write_error(temporary_, errno);
 }
 
 void DetectionsWriter::finish() {
   stream_ << (count_ == 0 ? "]\n" : "\n]\n");
-  stream_.close();
-  if (!stream_) throw DatasetError(temporary_, "write failed");
-  std::filesystem::rename(temporary_, path_);
+  close_checked(stream_, temporary_);
+  rename_checked(temporary_, path_);
   finished_ = true;
 }
 

@@ -1,3 +1,4 @@
+#include <cerrno>
 #include <clutterscope/notebooks_export/notebook.hpp>
 #include <cmath>
 #include <cstdio>
@@ -103,12 +104,21 @@ void write_atomically(const std::filesystem::path& path, const std::string& cont
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
     out.write(content.data(), static_cast<std::streamsize>(content.size()));
-    out.close();
+    // errno right after the failing call (open, write or the flush at close: a full disk often
+    // shows only there).
+    int failure = 0;
     if (!out) {
+      failure = errno == 0 ? EIO : errno;
+    } else {
+      errno = 0;
+      out.close();
+      if (!out) failure = errno == 0 ? EIO : errno;
+    }
+    if (failure != 0) {
       std::error_code ignored;
       std::filesystem::remove(temporary, ignored);
       throw NotebookError(NotebookError::Kind::kWriteFailed, path,
-                          "cannot write " + temporary.string());
+                          "cannot write: " + std::generic_category().message(failure));
     }
   }
   std::error_code error;

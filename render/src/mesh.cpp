@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <assimp/Importer.hpp>
 #include <cctype>
+#include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/mesh.hpp>
@@ -730,18 +731,7 @@ void write_ply(const std::filesystem::path& path, const Mesh& mesh, double scale
     out += sizeof(indices);
   }
 
-  const std::filesystem::path temporary = path.string() + ".tmp";
-  {
-    std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
-    file.write(data.data(), static_cast<std::streamsize>(data.size()));
-    if (!file) throw RenderError(temporary.string() + ": cannot write PLY file");
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, path, error);
-  if (error) {
-    std::filesystem::remove(temporary, error);
-    throw RenderError(path.string() + ": cannot write PLY file (rename failed)");
-  }
+  datasets::write_file_atomically(path, data);
 }
 
 }  // namespace clutterscope::render

@@ -6,6 +6,7 @@
 
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/files.hpp>
 #include <functional>
 
 #include "datasets/bop_fixture_support.hpp"
@@ -395,6 +396,14 @@ TEST_F(BopBadInput, DetectionsWithShortBbox) {
   expect_mentions(
       dataset_error([&] { dataset.attach_detections(path); }),
       {"detections.json", "detection 0, scene 1, image 0: bbox has 3 values, expected 4"});
+}
+
+TEST_F(BopBadInput, IncompleteGeneratedDatasetIsRefused) {
+  write_text(dir_.path() / kIncompleteDatasetMarker, "{}\n");
+  expect_mentions(dataset_error([&] { BopDataset::open(dir_.path()); }),
+                  {dir_.path().string() + " is an incomplete dataset left by an interrupted "
+                                          "`clutterscope generate`",
+                   (dir_.path() / ".clutterscope-incomplete").string(), "re-run generate"});
 }
 
 TEST_F(BopBadInput, MissingDatasetFolder) {

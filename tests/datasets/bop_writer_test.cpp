@@ -256,8 +256,9 @@ TEST(BopWriter, AtomicWriteReplacesTheFileAndLeavesNoTemporaries) {
     ++files;
   }
   EXPECT_EQ(files, 1u);
+  // A write failure is a runtime failure (exit 4), not bad input.
   EXPECT_THROW(write_file_atomically(dir.path() / "nested" / "table.csv" / "below_a_file", "x"),
-               DatasetError);
+               WriteError);
 }
 
 }  // namespace

@@ -1,12 +1,17 @@
 // End to end: `clutterscope generate` writes a BOP dataset our reader loads, in bop_toolkit's
 // layout and keys; same seed, same bytes; `detect` and `graph` reproduce what the generator
-// wrote; impossible requests fail fast naming the limit.
+// wrote; impossible requests fail fast naming the limit; --out is never left partial or mixed
+// (a non-empty one is refused unless --overwrite, a killed run leaves only a staging folder that
+// readers refuse); write failures exit 4 naming the file.
 
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/datasets/files.hpp>
 #include <clutterscope/render/context.hpp>
 #include <cstdio>
 #include <filesystem>
@@ -25,6 +30,7 @@ namespace {
 namespace fs = std::filesystem;
 
 using clutterscope::testing::CommandRun;
+using clutterscope::testing::quoted;
 using clutterscope::testing::run_merged;
 
 std::string read_text(const fs::path& path) {
@@ -36,10 +42,54 @@ std::string read_text(const fs::path& path) {
 
 nlohmann::json read_json(const fs::path& path) { return nlohmann::json::parse(read_text(path)); }
 
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream(path, std::ios::binary) << text;
+}
+
 std::set<std::string> keys_of(const nlohmann::json& object) {
   std::set<std::string> keys;
   for (const auto& item : object.items()) keys.insert(item.key());
   return keys;
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// Runs the binary under a file-size limit of 1 KiB or less (RLIMIT_FSIZE via `ulimit -f`, in
+// 512- or 1024-byte blocks by shell): with SIGXFSZ ignored, a write past the limit fails with
+// EFBIG, as a write to a full disk fails with ENOSPC. Stderr merged into the output.
+CommandRun run_with_file_size_limit(const std::string& arguments) {
+  const std::string command = "trap '' XFSZ; ulimit -f 1 && exec " + quoted(CLUTTERSCOPE_BINARY) +
+                              " " + arguments + " 2>&1";
+  CommandRun result;
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return result;
+  char buffer[4096];
+  std::size_t read = 0;
+  while ((read = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0)
+    result.output.append(buffer, read);
+  const int status = ::pclose(pipe);
+  result.signalled = WIFSIGNALED(status);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+// Folders next to `out` named OUT.partial-*: generate's staging folders.
+std::vector<fs::path> staging_folders(const fs::path& out) {
+  std::vector<fs::path> found;
+  for (const auto& entry : fs::directory_iterator(out.parent_path())) {
+    if (entry.path().filename().string().rfind(out.filename().string() + ".partial-", 0) == 0) {
+      found.push_back(entry.path());
+    }
+  }
+  return found;
+}
+
+// A small, fast dataset: tests of where the output goes, not of what it holds.
+std::string small_dataset(const fs::path& out, int scenes) {
+  return "generate --out " + quoted(out) + " --scenes " + std::to_string(scenes) +
+         " --objects 3 --views 1 --width 64 --height 48 --tessellation 12 --quiet";
 }
 
 class GeneratorCli : public ::testing::Test {
@@ -212,6 +262,139 @@ TEST_F(GeneratorCli, ImpossibleRequestsFailFastNamingTheLimit) {
   EXPECT_EQ(too_many.exit_code, 2);
   EXPECT_NE(too_many.output.find("fit in the tray"), std::string::npos) << too_many.output;
   EXPECT_FALSE(fs::exists(*root_ / "never" / "test"));
+}
+
+TEST_F(GeneratorCli, NonEmptyOutIsRefusedAndOverwriteReplacesTheWholeDataset) {
+  const fs::path notes = *root_ / "notes";
+  fs::create_directories(notes);
+  write_text(notes / "notes.txt", "mine\n");
+  const CommandRun refused = run_merged(small_dataset(notes, 1));
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_TRUE(contains(refused.output, "--out " + notes.string() + " is not empty"))
+      << refused.output;
+  EXPECT_TRUE(contains(refused.output, "--overwrite")) << refused.output;
+  const CommandRun not_a_dataset = run_merged(small_dataset(notes, 1) + " --overwrite");
+  EXPECT_EQ(not_a_dataset.exit_code, 2) << not_a_dataset.output;
+  EXPECT_TRUE(contains(not_a_dataset.output, notes.string() + " has no generator.json"))
+      << not_a_dataset.output;
+  EXPECT_EQ(read_text(notes / "notes.txt"), "mine\n");
+
+  // An empty folder is fine without --overwrite.
+  const fs::path empty = *root_ / "empty";
+  fs::create_directories(empty);
+  const CommandRun into_empty = run_merged(small_dataset(empty, 1));
+  ASSERT_EQ(into_empty.exit_code, 0) << into_empty.output;
+  EXPECT_TRUE(fs::exists(empty / "test" / "000000" / "scene_gt.json"));
+
+  // Replacing the 3-scene dataset with a 1-scene one leaves none of the old scenes.
+  const fs::path replaced = *root_ / "replaced";
+  fs::copy(*root_ / "a", replaced, fs::copy_options::recursive);
+  const CommandRun again = run_merged(small_dataset(replaced, 3));
+  EXPECT_EQ(again.exit_code, 2) << again.output;
+  const CommandRun overwritten = run_merged(small_dataset(replaced, 1) + " --overwrite");
+  ASSERT_EQ(overwritten.exit_code, 0) << overwritten.output;
+  std::vector<std::string> scenes;
+  for (const auto& entry : fs::directory_iterator(replaced / "test")) {
+    if (entry.is_directory()) scenes.push_back(entry.path().filename().string());
+  }
+  EXPECT_EQ(scenes, std::vector<std::string>{"000000"});
+  EXPECT_FALSE(fs::exists(replaced / "test" / "000000" / "rgb")) << "old scene's rgb/ is left";
+  EXPECT_EQ(read_json(replaced / "generator.json")["scenes"], 1);
+  EXPECT_EQ(read_json(replaced / "test" / "000000" / "scene_gt.json").size(), 1u);
+  EXPECT_FALSE(fs::exists(replaced / kIncompleteDatasetMarker));
+  EXPECT_TRUE(staging_folders(replaced).empty());
+  const CommandRun visibility =
+      run_merged("visibility " + quoted(replaced) + " --quiet --out " + quoted(*root_ / "vis"));
+  EXPECT_EQ(visibility.exit_code, 0) << visibility.output;
+}
+
+TEST_F(GeneratorCli, KilledRunLeavesNoDatasetAndTheNextRunCompletes) {
+  const fs::path out = *root_ / "killed";
+  const fs::path log = *root_ / "killed.log";
+  const std::string command = "exec " + quoted(CLUTTERSCOPE_BINARY) + " " +
+                              small_dataset(out, 100000) + " >" + quoted(log) + " 2>&1";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    std::_Exit(127);
+  }
+  // Kill it (no chance to clean up) once the first scene is written.
+  const fs::path staging = *root_ / ("killed.partial-" + std::to_string(pid));
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (!fs::exists(staging / "test" / "000000" / "scene_gt.json") &&
+         std::chrono::steady_clock::now() < deadline) {
+    ::usleep(10000);
+  }
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "generate ended before it was killed: " << read_text(log);
+
+  EXPECT_FALSE(fs::exists(out));
+  ASSERT_TRUE(fs::exists(staging / kIncompleteDatasetMarker));
+  EXPECT_EQ(read_json(staging / kIncompleteDatasetMarker)["command"], "clutterscope generate");
+  const CommandRun refused =
+      run_merged("visibility " + quoted(staging) + " --quiet --out " + quoted(*root_ / "kv"));
+  EXPECT_EQ(refused.exit_code, 3) << refused.output;
+  EXPECT_TRUE(contains(refused.output, staging.string() +
+                                           " is an incomplete dataset left by an interrupted "
+                                           "`clutterscope generate` (" +
+                                           (staging / ".clutterscope-incomplete").string() +
+                                           "); re-run generate"))
+      << refused.output;
+
+  const CommandRun rerun = run_merged(small_dataset(out, 2));
+  ASSERT_EQ(rerun.exit_code, 0) << rerun.output;
+  EXPECT_TRUE(fs::exists(out / "test" / "000001" / "scene_gt.json"));
+  EXPECT_FALSE(fs::exists(out / kIncompleteDatasetMarker));
+  EXPECT_TRUE(staging_folders(out).empty()) << "the killed run's staging folder is left";
+}
+
+TEST_F(GeneratorCli, WriteFailuresExit4NamingTheFile) {
+  const fs::path plain = *root_ / "plain";
+  write_text(plain, "a file, not a folder\n");
+
+  const CommandRun generate = run_merged(small_dataset(plain / "ds", 1));
+  EXPECT_EQ(generate.exit_code, 4) << generate.output;
+  EXPECT_TRUE(contains(generate.output, "cannot write " + (plain / "ds").string()))
+      << generate.output;
+
+  const fs::path limited = *root_ / "limited";
+  const CommandRun full = run_with_file_size_limit(small_dataset(limited, 1));
+  EXPECT_EQ(full.exit_code, 4) << full.output;
+  EXPECT_TRUE(contains(full.output, "cannot write " + limited.string() + ".partial-"))
+      << full.output;
+  EXPECT_TRUE(contains(full.output, ": File too large")) << full.output;
+  EXPECT_FALSE(fs::exists(limited));
+  EXPECT_TRUE(staging_folders(limited).empty()) << "a failed run leaves its staging folder";
+
+  const fs::path dataset = *root_ / "a";
+  const CommandRun visibility = run_with_file_size_limit(
+      "visibility " + quoted(dataset) + " --quiet --out " + quoted(*root_ / "visibility_limited"));
+  EXPECT_EQ(visibility.exit_code, 4) << visibility.output;
+  EXPECT_TRUE(
+      contains(visibility.output, "cannot write " + (*root_ / "visibility_limited").string()))
+      << visibility.output;
+  EXPECT_TRUE(contains(visibility.output, ": File too large")) << visibility.output;
+
+  const CommandRun visibility_under_file =
+      run_merged("visibility " + quoted(dataset) + " --quiet --out " + quoted(plain / "v"));
+  EXPECT_EQ(visibility_under_file.exit_code, 4) << visibility_under_file.output;
+  EXPECT_TRUE(contains(visibility_under_file.output, "cannot write " + (plain / "v").string()))
+      << visibility_under_file.output;
+
+  const CommandRun render = run_with_file_size_limit(
+      "render " + quoted(dataset) + " --scene 0 --image 0 --out " + quoted(*root_ / "render"));
+  EXPECT_EQ(render.exit_code, 4) << render.output;
+  EXPECT_TRUE(contains(render.output, "cannot write " + (*root_ / "render" / "depth.png").string() +
+                                          ": File too large"))
+      << render.output;
+  const CommandRun render_under_file = run_merged(
+      "render " + quoted(dataset) + " --scene 0 --image 0 --out " + quoted(plain / "render"));
+  EXPECT_EQ(render_under_file.exit_code, 4) << render_under_file.output;
+  EXPECT_TRUE(contains(render_under_file.output, "cannot write " + (plain / "render").string()))
+      << render_under_file.output;
 }
 
 }  // namespace

@@ -1,12 +1,8 @@
-#include <unistd.h>
-
-#include <atomic>
 #include <charconv>
+#include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/tools/formats.hpp>
 #include <cmath>
-#include <fstream>
 #include <stdexcept>
-#include <system_error>
 
 namespace clutterscope::tools {
 
@@ -112,32 +108,7 @@ void write_json_atomically(const std::filesystem::path& path, const nlohmann::js
 }
 
 void write_text_atomically(const std::filesystem::path& path, const std::string& contents) {
-  static std::atomic<unsigned long> counter{0};
-  std::filesystem::path temporary = path;
-  // Unique per process and call, so shards sharing a folder never write the same temp file.
-  temporary += ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
-  {
-    std::ofstream file(temporary, std::ios::binary | std::ios::trunc);
-    if (!file) {
-      throw std::runtime_error("cannot create " + temporary.string() + ": " +
-                               std::generic_category().message(errno));
-    }
-    file.write(contents.data(), static_cast<std::streamsize>(contents.size()));
-    file.close();
-    if (!file) {
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      throw std::runtime_error("cannot write " + temporary.string() + " (disk full?)");
-    }
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, path, error);
-  if (error) {
-    std::error_code ignored;
-    std::filesystem::remove(temporary, ignored);
-    throw std::runtime_error("cannot rename " + temporary.string() + " to " + path.string() + ": " +
-                             error.message());
-  }
+  datasets::write_file_atomically(path, contents);
 }
 
 }  // namespace clutterscope::tools

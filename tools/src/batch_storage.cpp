@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/files.hpp>
 #include <clutterscope/tools/formats.hpp>
 #include <cstdio>
 #include <fstream>
@@ -92,12 +94,12 @@ class TableWriter {
   TableWriter(const fs::path& root, const std::vector<TableSpec>& tables) {
     for (const TableSpec& table : tables) {
       const fs::path final_path = root / table.file_name;
-      fs::create_directories(final_path.parent_path());
+      datasets::create_folders(final_path.parent_path());
       fs::path temporary = final_path;
       temporary += ".tmp." + std::to_string(::getpid());
       paths_.push_back({temporary, final_path});
       streams_.emplace_back(temporary, std::ios::binary | std::ios::trunc);
-      if (!streams_.back()) throw std::runtime_error("cannot create " + temporary.string());
+      if (!streams_.back()) datasets::throw_write_error(temporary, errno);
       streams_.back() << table.header << '\n';
     }
   }
@@ -112,12 +114,14 @@ class TableWriter {
       fs::remove(paths_[t].first, ignored);
     }
   }
-  void append(std::size_t table, const std::string& rows) { streams_[table] << rows; }
+  void append(std::size_t table, const std::string& rows) {
+    streams_[table] << rows;
+    if (!streams_[table]) datasets::throw_write_error(paths_[table].second, errno);
+  }
   void commit() {
     for (std::size_t t = 0; t < streams_.size(); ++t) {
-      streams_[t].close();
-      if (!streams_[t]) throw std::runtime_error("cannot write " + paths_[t].first.string());
-      fs::rename(paths_[t].first, paths_[t].second);
+      datasets::close_checked(streams_[t], paths_[t].second);
+      datasets::rename_checked(paths_[t].first, paths_[t].second);
     }
     committed_ = true;
   }
@@ -195,7 +199,7 @@ BatchFolder BatchFolder::prepare(const fs::path& out_dir, const std::string& com
     }
     return existing;
   }
-  fs::create_directories(batch_dir(out_dir));
+  datasets::create_folders(batch_dir(out_dir));
   // items.tsv first: a job.json always has its item list next to it.
   write_text_atomically(items_path(out_dir), items_tsv);
   write_json_atomically(job_path(out_dir),
@@ -222,7 +226,7 @@ BatchFolder BatchFolder::prepare_like(const fs::path& out_dir, const BatchFolder
     existing.require_same_job(source);
     return existing;
   }
-  fs::create_directories(batch_dir(out_dir));
+  datasets::create_folders(batch_dir(out_dir));
   copy_file_atomically(items_path(source.root_), items_path(out_dir));
   write_json_atomically(job_path(out_dir),
                         {{"format", kFormatVersion}, {"fingerprint", source.fingerprint_}});

@@ -95,8 +95,14 @@ void add_generate_command(CLI::App& app, int* exit_code) {
       "Procedural cluttered scenes as a BOP dataset (split test): models (PLY, mm), "
       "scene_camera.json with the camera world pose, scene_gt.json, scene_graph.json, depth/ "
       "from a synthetic depth sensor, optional flat-shaded rgb/, synthetic 2D detections "
-      "(detections_test.json), sensor.json and generator.json. Same seed, same bytes.");
-  command->add_option("--out", arguments->out, "output dataset folder")->required();
+      "(detections_test.json), sensor.json and generator.json. Same seed, same bytes. The "
+      "dataset is built in OUT.partial-PID next to OUT and renamed to OUT when complete, so OUT "
+      "never holds a partial dataset; the staging folder of a killed run is removed by the next "
+      "run (readers refuse it: it holds .clutterscope-incomplete).");
+  command->add_option("--out", arguments->out, "output dataset folder (new or empty)")->required();
+  command->add_flag("--overwrite", options.overwrite,
+                    "replace a non-empty --out (a dataset an earlier generate wrote) once the new "
+                    "dataset is complete");
   command->add_option("--preset", arguments->preset, "scene layout: tray, shelf or pile")
       ->check(CLI::IsMember({"tray", "shelf", "pile"}))
       ->capture_default_str();
@@ -136,7 +142,7 @@ void add_generate_command(CLI::App& app, int* exit_code) {
                 << summary.objects << " object views (" << summary.fully_visible
                 << " fully visible, " << summary.partly_visible << " partly, " << summary.hidden
                 << " hidden), deepest stack " << summary.deepest_stack << ", " << summary.detections
-                << " detections in " << summary.seconds << " s\n";
+                << " detections in " << summary.seconds << " s; wrote " << run.out.string() << "\n";
     }
     *exit_code = 0;
   });

@@ -1,10 +1,19 @@
 #include "generate_pipeline.hpp"
 
+#include <fcntl.h>
+#include <signal.h>
+#include <stdio.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/files.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/tools/batch.hpp>
+#include <fstream>
 #include <memory>
+#include <sstream>
 
 #include "progress.hpp"
 
@@ -19,6 +28,137 @@ std::string six_digits(int id) {
   std::snprintf(text, sizeof(text), "%06d", id);
   return text;
 }
+
+std::string host_name() {
+  char name[256] = {};
+  if (::gethostname(name, sizeof(name) - 1) != 0) return "";
+  return name;
+}
+
+constexpr const char* kStagingInfix = ".partial-";
+
+// OUT.partial-PID, next to OUT on the same file system, so the last step is one rename.
+fs::path staging_folder(const fs::path& out, long pid) {
+  return out.parent_path() / (out.filename().string() + kStagingInfix + std::to_string(pid));
+}
+
+// Staging folders of OUT that a generate run on this host left when it was killed: named
+// OUT.partial-PID, still marked incomplete, and no process PID alive any more. A folder whose
+// process still runs (or runs elsewhere) is left alone.
+std::vector<fs::path> stale_staging_folders(const fs::path& out) {
+  std::vector<fs::path> stale;
+  std::error_code error;
+  const std::string prefix = out.filename().string() + kStagingInfix;
+  for (fs::directory_iterator entry(out.parent_path(), error), end; !error && entry != end;
+       entry.increment(error)) {
+    const std::string name = entry->path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.empty() || digits.size() > 9 ||
+        digits.find_first_not_of("0123456789") != std::string::npos) {
+      continue;
+    }
+    const long pid = std::stol(digits);
+    const fs::path marker = entry->path() / datasets::kIncompleteDatasetMarker;
+    std::ifstream stream(marker, std::ios::binary);
+    std::ostringstream text;
+    text << stream.rdbuf();
+    const nlohmann::json owner = nlohmann::json::parse(text.str(), nullptr, false);
+    const bool ours = owner.is_object() && owner.contains("host") && owner.contains("pid") &&
+                      owner["host"] == host_name() && owner["pid"] == pid;
+    if (!ours) continue;
+    if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+      stale.push_back(entry->path());
+    }
+  }
+  return stale;
+}
+
+// Writes the incomplete-dataset marker into `folder`: the command, and the output, process
+// and host it belongs to (stale_staging_folders reads the last two).
+void write_marker(const fs::path& folder, const fs::path& out) {
+  datasets::write_file_atomically(folder / datasets::kIncompleteDatasetMarker,
+                                  nlohmann::json({{"command", "clutterscope generate"},
+                                                  {"out", out.string()},
+                                                  {"pid", static_cast<long>(::getpid())},
+                                                  {"host", host_name()}})
+                                          .dump(2) +
+                                      "\n");
+}
+
+// Removes the staging folder unless the dataset was moved into place: a failed run leaves
+// nothing behind (only a killed one can, and the next run removes it).
+class StagingFolder {
+ public:
+  explicit StagingFolder(fs::path folder) : folder_(std::move(folder)) {}
+  StagingFolder(const StagingFolder&) = delete;
+  StagingFolder& operator=(const StagingFolder&) = delete;
+  ~StagingFolder() {
+    std::error_code ignored;
+    if (!moved_) fs::remove_all(folder_, ignored);
+  }
+  const fs::path& path() const { return folder_; }
+  void moved() { moved_ = true; }
+
+ private:
+  fs::path folder_;
+  bool moved_ = false;
+};
+
+// Refuses an `out` that is a file, or a non-empty folder without --overwrite; with --overwrite
+// only a folder an earlier generate wrote (it has generator.json) is replaced.
+void check_out_folder(const fs::path& out, const fs::path& as_given, bool overwrite) {
+  std::error_code error;
+  const fs::file_status status = fs::status(out, error);
+  if (!fs::exists(status)) return;
+  if (!fs::is_directory(status)) {
+    throw UsageError("--out " + as_given.string() + " exists and is not a folder");
+  }
+  if (fs::is_empty(out, error)) return;
+  if (!overwrite) {
+    throw UsageError("--out " + as_given.string() +
+                     " is not empty; choose a new folder, or pass --overwrite to replace it once "
+                     "the new dataset is complete");
+  }
+  if (!fs::exists(out / "generator.json", error)) {
+    throw UsageError(
+        "--overwrite replaces only a dataset written by `clutterscope generate`, and " +
+        as_given.string() + " has no generator.json: remove it yourself or choose another --out");
+  }
+}
+
+// Moves the complete staging folder to `out`. An existing `out` (an empty folder, or the old
+// dataset under --overwrite) is swapped out in one step where the file system can
+// (renameat2 RENAME_EXCHANGE), so `out` is never missing or mixed, then deleted.
+void move_into_place(StagingFolder& staging, const fs::path& out) {
+  std::error_code error;
+  if (!fs::exists(out, error)) {
+    datasets::rename_checked(staging.path(), out);
+    staging.moved();
+    return;
+  }
+  if (::renameat2(AT_FDCWD, staging.path().c_str(), AT_FDCWD, out.c_str(), RENAME_EXCHANGE) == 0) {
+    // Staging now holds the old dataset and its destructor deletes it; marked, so that the
+    // next run removes what a kill during the deletion leaves.
+    try {
+      write_marker(staging.path(), out);
+    } catch (const datasets::WriteError&) {
+      // The new dataset is in place; the old one is deleted all the same.
+    }
+    return;
+  }
+  if (errno != EINVAL && errno != ENOSYS) datasets::throw_write_error(out, errno);
+  // No exchange on this file system: the old dataset steps aside first, then is deleted.
+  const fs::path old =
+      out.parent_path() / (out.filename().string() + ".replaced-" + std::to_string(::getpid()));
+  datasets::rename_checked(out, old);
+  datasets::rename_checked(staging.path(), out);
+  staging.moved();
+  fs::remove_all(old, error);
+}
+
+GenerateSummary write_dataset(const GenerateOptions& options,
+                              const std::vector<datasets::CatalogueItem>& catalogue);
 
 }  // namespace
 
@@ -73,9 +213,39 @@ render::Mesh to_render_mesh(const datasets::TriangleMesh& mesh) {
 }
 
 GenerateSummary generate_dataset(const GenerateOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
   const std::vector<datasets::CatalogueItem> catalogue = datasets::default_catalogue();
   options.validate(catalogue);
+  fs::path out = fs::absolute(options.out).lexically_normal();
+  if (out.filename().empty()) out = out.parent_path();  // "data/set/" names "data/set"
+  check_out_folder(out, options.out, options.overwrite);
+
+  for (const fs::path& stale : stale_staging_folders(out)) {
+    std::error_code ignored;
+    fs::remove_all(stale, ignored);
+  }
+  // A folder of this name is a dead process's (this PID is ours now): never build on it.
+  StagingFolder staging(staging_folder(out, ::getpid()));
+  std::error_code error;
+  fs::remove_all(staging.path(), error);
+  datasets::create_folders(staging.path());
+  // The marker goes in first and comes out last: a folder a killed run leaves is recognisable,
+  // and readers refuse it.
+  write_marker(staging.path(), out);
+  const fs::path marker = staging.path() / datasets::kIncompleteDatasetMarker;
+  GenerateOptions staged = options;
+  staged.out = staging.path();
+  const GenerateSummary summary = write_dataset(staged, catalogue);
+  fs::remove(marker, error);
+  if (error) datasets::throw_write_error(marker, error.value());
+  move_into_place(staging, out);
+  return summary;
+}
+
+namespace {
+
+GenerateSummary write_dataset(const GenerateOptions& options,
+                              const std::vector<datasets::CatalogueItem>& catalogue) {
+  const auto start = std::chrono::steady_clock::now();
 
   // Models: PLY in millimetres with normals, models_info.json, models_names.json.
   datasets::BopWriter writer(options.out);
@@ -84,7 +254,7 @@ GenerateSummary generate_dataset(const GenerateOptions& options) {
   for (const auto& item : catalogue) {
     const datasets::TriangleMesh mesh = datasets::tessellate(item, options.tessellation);
     const fs::path path = options.out / "models" / ("obj_" + six_digits(item.obj_id) + ".ply");
-    fs::create_directories(path.parent_path());
+    datasets::create_folders(path.parent_path());
     meshes.push_back(to_render_mesh(mesh));
     render::write_ply(path, meshes.back());
     infos.push_back(datasets::model_info(item, mesh, path));
@@ -180,5 +350,7 @@ GenerateSummary generate_dataset(const GenerateOptions& options) {
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }
+
+}  // namespace
 
 }  // namespace clutterscope::tools

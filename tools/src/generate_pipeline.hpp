@@ -37,6 +37,9 @@ struct GenerateOptions {
   datasets::DetectorOptions detector;
   bool rgb = false;
   bool quiet = false;
+  // Replace a non-empty `out` (a dataset an earlier generate wrote) once the new one is
+  // complete; without it a non-empty `out` is refused.
+  bool overwrite = false;
 
   // Throws UsageError naming the option and the limit.
   void validate(const std::vector<datasets::CatalogueItem>& catalogue) const;
@@ -56,6 +59,10 @@ struct GenerateSummary {
   double seconds = 0;
 };
 
+// Builds the dataset in a staging folder next to `out` (OUT.partial-PID, marked by
+// datasets::kIncompleteDatasetMarker until complete) and renames it to `out` when complete, so
+// `out` never holds a partial or mixed dataset. A staging folder a killed run left behind is
+// removed. Throws UsageError for a non-empty `out` without `overwrite`.
 GenerateSummary generate_dataset(const GenerateOptions& options);
 
 render::Mesh to_render_mesh(const datasets::TriangleMesh& mesh);

@@ -154,7 +154,7 @@ ModelInfo box_model_info(int obj_id, const Eigen::Vector3d& size_m,
                          const std::filesystem::path& mesh_path, std::string label = "");
 
 // Writes `contents` to `path` atomically (temporary file in the same folder + rename).
-// Creates missing parent folders. Throws DatasetError when the file cannot be written.
+// Creates missing parent folders. Throws WriteError (files.hpp) when the file cannot be written.
 void write_file_atomically(const std::filesystem::path& path, const std::string& contents);
 
 }  // namespace clutterscope::datasets

@@ -19,6 +19,20 @@ class DatasetError : public std::runtime_error {
   std::filesystem::path file_;
 };
 
+// An output that could not be written (disk full, file too large, permission denied, a parent
+// that is not a folder): a runtime failure, not bad input. The message names the file and the
+// system's reason ("cannot write OUT/objects.csv: No space left on device"). The CLI maps it
+// to exit code 4.
+class WriteError : public std::runtime_error {
+ public:
+  WriteError(const std::filesystem::path& file, const std::string& reason)
+      : std::runtime_error("cannot write " + file.string() + ": " + reason), file_(file) {}
+  const std::filesystem::path& file() const { return file_; }
+
+ private:
+  std::filesystem::path file_;
+};
+
 // Where in a dataset an error happened, formatted as "scene 3, image 12, gt 4: ".
 std::string location(int scene_id, int im_id = -1, int gt_id = -1);
 
