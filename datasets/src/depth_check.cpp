@@ -58,7 +58,9 @@ double likely_depth_scale(double ratio, double current_scale) {
 }
 
 std::string format_ratio(double ratio) {
-  const int magnitude = static_cast<int>(std::floor(std::log10(ratio)));
+  int magnitude = static_cast<int>(std::floor(std::log10(ratio)));
+  // 9.9996 rounds to 10.0, not 10.00: the magnitude of the rounded value counts.
+  if (std::round(ratio * std::pow(10.0, 2 - magnitude)) >= 1000.0) ++magnitude;
   const int decimals = std::max(1, 2 - magnitude);
   char text[64];
   std::snprintf(text, sizeof text, "%.*f", decimals, ratio);

@@ -80,6 +80,8 @@ TEST(DepthCheck, RatioIsPrintedWithThreeSignificantDigits) {
   EXPECT_EQ(format_ratio(1.2749), "1.27");
   EXPECT_EQ(format_ratio(0.1), "0.100");
   EXPECT_EQ(format_ratio(123.4), "123.4");
+  EXPECT_EQ(format_ratio(9.9996), "10.0");
+  EXPECT_EQ(format_ratio(0.99996), "1.00");
 }
 
 TEST(DepthCheck, RefusalNamesTheRatioTheLikelyScaleAndTheFile) {
