@@ -450,10 +450,13 @@ std::shared_ptr<const BopDataset::SceneFiles> BopDataset::scene(const std::strin
   }
 
   const std::vector<int> ids = sorted_ids(camera_json, camera_path, where, "image");
+  // The camera's size: camera.json, else the scene's first rgb/gray image, else its first
+  // depth image. A depth image of another size is refused when loaded (never rescaled).
   std::optional<cv::Size> image_size;
-  if (!ids.empty()) {
-    fs::path image = depth_file(files->dir, ids.front());
-    if (image.empty()) image = rgb_file(files->dir, ids.front());
+  if (root_camera_) image_size = cv::Size(root_camera_->width, root_camera_->height);
+  if (!image_size && !ids.empty()) {
+    fs::path image = rgb_file(files->dir, ids.front());
+    if (image.empty()) image = depth_file(files->dir, ids.front());
     if (!image.empty()) {
       image_size = detail::read_image_size(image);
       if (!image_size) {
@@ -461,7 +464,6 @@ std::shared_ptr<const BopDataset::SceneFiles> BopDataset::scene(const std::strin
       }
     }
   }
-  if (!image_size && root_camera_) image_size = cv::Size(root_camera_->width, root_camera_->height);
   const double default_depth_scale =
       root_camera_ && root_camera_->depth_scale ? *root_camera_->depth_scale : 1.0;
 

@@ -190,7 +190,7 @@ BopDepthRenderer::BopDepthRenderer(const EglContext& context) : state_(std::make
   glGetIntegerv(GL_MAJOR_VERSION, &major);
   glGetIntegerv(GL_MINOR_VERSION, &minor);
   state_->has_clip_control = major * 10 + minor >= 45;
-  glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &state_->max_size);
+  state_->max_size = gl::max_target_size();
   state_->program = gl::link_program(kVertexShader, kFragmentShader, "BOP depth renderer");
   const GLuint program = state_->program.get();
   state_->mvp = glGetUniformLocation(program, "u_mvp");
@@ -198,6 +198,8 @@ BopDepthRenderer::BopDepthRenderer(const EglContext& context) : state_(std::make
 }
 
 BopDepthRenderer::BopDepthRenderer(BopDepthRenderer&&) noexcept = default;
+
+int BopDepthRenderer::max_target_size() const { return state_->max_size; }
 BopDepthRenderer& BopDepthRenderer::operator=(BopDepthRenderer&&) noexcept = default;
 BopDepthRenderer::~BopDepthRenderer() = default;
 

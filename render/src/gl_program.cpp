@@ -1,5 +1,6 @@
 #include "gl_program.hpp"
 
+#include <algorithm>
 #include <clutterscope/render/context.hpp>
 #include <cstdio>
 #include <limits>
@@ -89,6 +90,15 @@ MeshBuffers upload_mesh_buffers(const Mesh& mesh) {
                mesh.triangles.data(), GL_STATIC_DRAW);
   glBindVertexArray(0);
   return buffers;
+}
+
+int max_target_size() {
+  GLint renderbuffer = 0, texture = 0;
+  GLint viewport[2] = {0, 0};
+  glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &renderbuffer);
+  glGetIntegerv(GL_MAX_TEXTURE_SIZE, &texture);
+  glGetIntegerv(GL_MAX_VIEWPORT_DIMS, viewport);
+  return std::min({renderbuffer, texture, viewport[0], viewport[1]});
 }
 
 }  // namespace clutterscope::render::gl

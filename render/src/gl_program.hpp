@@ -28,4 +28,8 @@ Program link_program(const char* vertex_source, const char* fragment_source, con
 // Throws RenderError naming `what` when GL has recorded an error.
 void check_error(const char* what);
 
+// The largest width and height the current context can render into and read back:
+// min(GL_MAX_RENDERBUFFER_SIZE, GL_MAX_VIEWPORT_DIMS, GL_MAX_TEXTURE_SIZE).
+int max_target_size();
+
 }  // namespace clutterscope::render::gl

@@ -606,7 +606,7 @@ Renderer::Renderer(const EglContext& context, const RendererOptions& options)
   const int version = major * 10 + minor;
   state_->zero_to_one_clip = version >= 45 || has_gl_extension("GL_ARB_clip_control");
   state_->coverage_supported = version >= 45;
-  glGetIntegerv(GL_MAX_RENDERBUFFER_SIZE, &state_->max_size);
+  state_->max_size = gl::max_target_size();
   if (state_->zero_to_one_clip) glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   state_->exact_depth = options.depth == DepthMode::kExactPerTile;
@@ -639,6 +639,8 @@ Renderer::Renderer(const EglContext& context, const RendererOptions& options)
 Renderer::Renderer(Renderer&&) noexcept = default;
 Renderer& Renderer::operator=(Renderer&&) noexcept = default;
 Renderer::~Renderer() = default;
+
+int Renderer::max_target_size() const { return state_->max_size; }
 
 DepthLabelImage Renderer::render(const Intrinsics& intrinsics,
                                  const std::vector<Instance>& instances) {

@@ -325,7 +325,8 @@ TEST_F(EstimateGl, WithoutGraphAndDepthInfersTheGraphAndSimulatesTheSensor) {
   }
   const fs::path out = fresh_dir("estimate_bare_out");
   const CommandRun result =
-      run_merged("estimate " + data.string() + " --out " + out.string() + kFast);
+      run_merged("estimate " + data.string() + " --out " + out.string() +
+                 " --observation synthetic" + kFast);
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const nlohmann::json counts = nlohmann::json::parse(read_file(out / "summary.json")).at("counts");
   EXPECT_EQ(counts.at("images_with_inferred_graph"), 2);

@@ -20,6 +20,7 @@
 
 #include "commands.hpp"
 #include "dataset_options.hpp"
+#include "depth_options.hpp"
 
 namespace clutterscope::tools {
 
@@ -311,6 +312,12 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
   job.fingerprint["proxy_tolerance_mm"] = 1e3 * e.proxy_tolerance_m;
   job.fingerprint["bandwidth_floor_mm"] = 1e3 * e.min_bandwidth_m;
   job.fingerprint["icp_max_distance_mm"] = 1e3 * e.icp_max_distance_m;
+  // Defaults add nothing, so that folders of earlier runs keep resuming.
+  if (e.observation == Observation::kSynthetic) {
+    job.fingerprint["observation"] = to_string(e.observation);
+  } else {
+    add_depth_check_fingerprint(e.depth, &job.fingerprint);
+  }
   job.make_worker = [&dataset, &arguments]() -> ItemFunction {
     auto worker = std::make_shared<EstimateWorker>(dataset, arguments);
     return [worker](const datasets::ImageKey& key) { return worker->run(key); };
@@ -374,6 +381,16 @@ void add_estimate_command(CLI::App& app, int* exit_code) {
       "--proxy-tolerance-mm", [&e](double mm) { e.proxy_tolerance_m = 1e-3 * mm; },
       "decimate the scoring models below --proxy-triangles while their surface stays within "
       "this distance (mm, default 1)");
+  command
+      ->add_option_function<std::string>(
+          "--observation",
+          [&e](const std::string& name) {
+            e.observation = name == "synthetic" ? Observation::kSynthetic : Observation::kMeasured;
+          },
+          "measured (default): the dataset's depth images, an image without one fails; "
+          "synthetic: depth synthesised from the GT render through the sensor model")
+      ->check(CLI::IsMember({"measured", "synthetic"}));
+  add_depth_check_options(*command, &e.depth);
   command->add_flag("--save-beliefs", arguments->save_beliefs,
                     "also write the belief samples of every iteration (camera frame, mm)");
   command->add_flag("--no-time", arguments->no_time,

@@ -18,7 +18,7 @@ namespace {
 // An option of a step that report forwards when given. Its default and validation are the
 // step's own (`clutterscope STEP --help`), checked before either step starts.
 struct StepOption {
-  const char* step;  // "visibility" or "estimate"
+  const char* step;  // "visibility", "estimate" or "both"
   const char* name;
   bool flag;
   const char* help;
@@ -50,6 +50,12 @@ const std::vector<StepOption>& step_options() {
        "estimate: also write the belief samples of every iteration"},
       {"estimate", "--no-time", true,
        "estimate: leave times empty, so every output is byte-reproducible"},
+      {"estimate", "--observation", false,
+       "estimate: measured (default; an image without depth fails) or synthetic"},
+      {"both", "--depth-scale", false,
+       "visibility (BOP modes) and estimate: mm per depth PNG unit for every image"},
+      {"both", "--no-depth-check", true,
+       "visibility (BOP modes) and estimate: skip the measured-vs-GT depth-scale check"},
   };
   return options;
 }
@@ -66,9 +72,10 @@ void run_report_command(CLI::App& command, ReportCommandState& state, int* exit_
   arguments.notebook = !state.no_notebook;
   for (const StepOption& option : step_options()) {
     if (command.get_option(option.name)->count() == 0) continue;
-    ForwardedOptions& forwarded =
-        std::string(option.step) == "estimate" ? arguments.estimate : arguments.visibility;
-    forwarded[option.name] = option.flag ? "" : state.values[option.name];
+    const std::string step = option.step;
+    const std::string value = option.flag ? "" : state.values[option.name];
+    if (step != "visibility") arguments.estimate[option.name] = value;
+    if (step != "estimate") arguments.visibility[option.name] = value;
   }
   // Each step's runner reports its computed and reused images on stderr (and in run.json).
   const ReportRun run = run_report(arguments);

@@ -184,6 +184,8 @@ class Simulation {
     const std::vector<int> present = state.present_instances();
     EstimateOptions options = arguments_.estimate;
     options.variance_threshold_cm2 = threshold;
+    // Each round observes the scene as it is now, rendered: synthetic by design.
+    options.observation = Observation::kSynthetic;
     options.seed =
         item_rng(arguments_.estimate.seed, view_.key, "simulate round " + std::to_string(round))();
 

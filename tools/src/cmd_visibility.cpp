@@ -29,6 +29,7 @@
 
 #include "commands.hpp"
 #include "dataset_options.hpp"
+#include "depth_options.hpp"
 
 namespace clutterscope::tools {
 
@@ -52,6 +53,7 @@ struct VisibilityArguments {
   bool write_bop_info = false;
   bool masks = false;
   bool overlays = false;
+  datasets::DepthCheckOptions depth;  // BOP modes: --depth-scale, --no-depth-check
 };
 
 std::string six_digits(int id) {
@@ -129,14 +131,20 @@ class VisibilityWorker {
   ItemOutput run(const datasets::ImageKey& key) {
     const datasets::SceneView view = dataset_.load(key);
     const std::string where = datasets::location(key.scene_id, key.im_id);
+    visibility::check_drawable(view.camera, visibility::kVisibilityCanvasFactor,
+                               options_.is_bop() ? bop_renderer_.max_target_size()
+                                                 : renderer_.max_target_size(),
+                               where);
+    const double depth_scale = arguments_.depth.depth_scale.value_or(view.camera.depth_scale);
     cv::Mat measured_mm;
+    std::filesystem::path depth_path;
     if (options_.is_bop()) {
       // Name the file BOP expects when the image has none, so the error says where to look.
       char expected[32];
       std::snprintf(expected, sizeof expected, "%06d/depth/%06d.png", key.scene_id, key.im_id);
-      const std::filesystem::path depth_path =
+      depth_path =
           view.depth_path.empty() ? dataset_.root() / key.split / expected : view.depth_path;
-      measured_mm = visibility::load_bop_depth_mm(depth_path.string(), view.camera.depth_scale,
+      measured_mm = visibility::load_bop_depth_mm(depth_path.string(), depth_scale,
                                                   view.camera.width, view.camera.height, where);
     }
     std::vector<std::string> labels;
@@ -158,8 +166,14 @@ class VisibilityWorker {
         bop_object.t = object.model_to_camera.translation() * 1000.0;
         objects.push_back(bop_object);
       }
-      result = visibility::compute_bop_image_visibility(bop_renderer_, view.camera, objects,
-                                                        options_, measured_mm, where, masks_out);
+      // The depth-scale check compares the measured depth with the GT depth of the renders
+      // the counts are made from (no extra rendering).
+      cv::Mat gt_depth_mm;
+      result = visibility::compute_bop_image_visibility(
+          bop_renderer_, view.camera, objects, options_, measured_mm, where, masks_out,
+          arguments_.depth.check ? &gt_depth_mm : nullptr);
+      datasets::check_depth_scale(measured_mm, gt_depth_mm, depth_scale, arguments_.depth,
+                                  depth_path, where);
     } else {
       std::vector<render::Instance> instances;
       for (std::size_t gt = 0; gt < view.objects.size(); ++gt) {
@@ -447,13 +461,17 @@ void run_visibility(const VisibilityArguments& arguments, int* exit_code) {
   visibility::VisibilityOptions check;
   check.delta_mm = arguments.delta_mm;
   if (!check.IsValid(&why)) throw UsageError("--delta-mm: " + why);
+  if (!arguments.depth.IsValid(&why)) throw UsageError(why);
   const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset.dataset);
   BatchJob job;
   job.output = find_batch_output("visibility");
   job.items = dataset.list_images(selection_of(arguments.dataset));
   job.fingerprint = dataset_fingerprint(arguments.dataset);
   job.fingerprint["mode"] = arguments.mode;
-  if (arguments.mode != "rendered") job.fingerprint["delta_mm"] = arguments.delta_mm;
+  if (arguments.mode != "rendered") {
+    job.fingerprint["delta_mm"] = arguments.delta_mm;
+    add_depth_check_fingerprint(arguments.depth, &job.fingerprint);
+  }
   job.fingerprint["pixel_center"] = arguments.pixel_center;
   job.fingerprint["write_bop_info"] = arguments.write_bop_info;
   job.fingerprint["masks"] = arguments.masks;
@@ -500,6 +518,7 @@ void add_visibility_command(CLI::App& app, int* exit_code) {
   command->add_flag("--overlays", arguments->overlays,
                     "also write OUT/overlays/SPLIT/SCENE/IMID.png: visible parts tinted, hidden "
                     "parts outlined, label and visibility % (red below 30%)");
+  add_depth_check_options(*command, &arguments->depth);
   command->callback([arguments, exit_code] { run_visibility(*arguments, exit_code); });
 }
 

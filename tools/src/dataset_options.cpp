@@ -1,6 +1,8 @@
 #include "dataset_options.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <iostream>
 #include <thread>
 
 namespace clutterscope::tools {
@@ -127,7 +129,17 @@ datasets::DatasetSelection selection_of(const DatasetOptions& options) {
   return selection;
 }
 
+void warn_if_more_jobs_than_cores(int jobs) {
+  const unsigned cores = std::thread::hardware_concurrency();
+  static std::atomic<bool> warned{false};
+  if (cores == 0 || jobs <= static_cast<int>(cores) || warned.exchange(true)) return;
+  std::cerr << "warning: --jobs " << jobs << " is more than the " << cores
+            << " cores of this machine: workers beyond that only compete for them (and each "
+               "holds a render context); continuing\n";
+}
+
 BatchOptions batch_options_of(const DatasetOptions& options, const std::string& label) {
+  warn_if_more_jobs_than_cores(options.jobs);
   BatchOptions batch;
   batch.out_dir = options.out;
   batch.jobs = options.jobs;

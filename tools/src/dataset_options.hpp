@@ -37,7 +37,12 @@ std::string format_id_list(const std::vector<int>& ids);
 // The dataset selection (one split, scene and image ids) of the options.
 datasets::DatasetSelection selection_of(const DatasetOptions& options);
 
-// Batch options (out, jobs, shard, keep-going, quiet) of the options.
+// One line on stderr, once per process, when `jobs` exceeds the machine's cores (the run goes
+// on: threads beyond the cores only compete for them).
+void warn_if_more_jobs_than_cores(int jobs);
+
+// Batch options (out, jobs, shard, keep-going, quiet) of the options; warns as
+// warn_if_more_jobs_than_cores does.
 BatchOptions batch_options_of(const DatasetOptions& options, const std::string& label);
 
 // The fingerprint entries every dataset command shares: absolute dataset path, split, and the

@@ -13,7 +13,6 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <functional>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -77,17 +76,29 @@ std::string canonical_value(const std::string& value) {
   return value;
 }
 
+// An app that parses and validates but runs no command: CLI11 calls pre_callback() after every
+// check and before the commands' callbacks. (Replacing the callbacks instead would destroy the
+// option storage they own while the parse still writes into it.)
+class ValidatingApp : public CLI::App {
+ public:
+  struct Validated {};
+  void pre_callback() override { throw Validated{}; }
+};
+
 // Parses (and, unless dry_run, runs) one step's command line with the step's own command, so
 // its options are validated exactly as `clutterscope COMMAND` would. Returns its exit code.
 int parse_step(const std::vector<std::string>& command_line, bool dry_run) {
-  CLI::App app;
+  ValidatingApp validating;
+  CLI::App running;
+  CLI::App& app = dry_run ? static_cast<CLI::App&>(validating) : running;
   int exit_code = 0;
   step_registration(command_line.front())(app, &exit_code);
-  if (dry_run) {
-    for (CLI::App* command : app.get_subcommands({})) command->callback(std::function<void()>());
-  }
   std::vector<std::string> reversed(command_line.rbegin(), command_line.rend());
-  app.parse(reversed);
+  try {
+    app.parse(reversed);
+  } catch (const ValidatingApp::Validated&) {
+    // dry run: the options are valid
+  }
   return exit_code;
 }
 

@@ -35,6 +35,24 @@ bool VisibilityOptions::IsValid(std::string* why) const {
 
 double near_plane_m() { return render::Intrinsics{}.near_m; }
 
+void check_drawable(const datasets::Camera& camera, int canvas_factor, int max_target_size,
+                    const std::string& where) {
+  const long long width = static_cast<long long>(camera.width) * canvas_factor;
+  const long long height = static_cast<long long>(camera.height) * canvas_factor;
+  if (width <= max_target_size && height <= max_target_size) return;
+  std::ostringstream message;
+  message << where << "the image is " << camera.width << "x" << camera.height << " pixels";
+  if (canvas_factor > 1) {
+    message << ", drawn on a " << canvas_factor << "W x " << canvas_factor << "H canvas of "
+            << width << "x" << height;
+  }
+  message << ": beyond this renderer's limit of " << max_target_size
+          << " pixels per side (GL_MAX_RENDERBUFFER_SIZE, GL_MAX_VIEWPORT_DIMS, "
+             "GL_MAX_TEXTURE_SIZE); images up to "
+          << max_target_size / canvas_factor << " pixels per side can be drawn";
+  throw datasets::DatasetError("", message.str());
+}
+
 namespace {
 
 void check_in_front_of_camera(const std::vector<render::Instance>& objects, double near_m,
@@ -76,7 +94,7 @@ void compute_rendered(render::Renderer& renderer, const render::Intrinsics& intr
                       const std::vector<render::Instance>& instances, ImageVisibility* result,
                       ImageMasks* masks) {
   render::CountOptions count_options;
-  count_options.canvas_factor = 3;
+  count_options.canvas_factor = kVisibilityCanvasFactor;
   const std::vector<render::InstanceCounts> counts =
       renderer.count_visibility(intrinsics, instances, count_options);
   for (std::size_t i = 0; i < instances.size(); ++i) {
@@ -102,12 +120,24 @@ void compute_rendered(render::Renderer& renderer, const render::Intrinsics& intr
   });
 }
 
+// scene = the nearer of scene and object where the object has depth (0 = none).
+void nearest_surface(const cv::Mat& object, cv::Mat scene) {
+  for (int v = 0; v < object.rows; ++v) {
+    const float* in = object.ptr<float>(v);
+    float* out = scene.ptr<float>(v);
+    for (int u = 0; u < object.cols; ++u) {
+      if (in[u] > 0 && (out[u] == 0 || in[u] < out[u])) out[u] = in[u];
+    }
+  }
+}
+
 // bop_toolkit renders each object alone on the 3W x 3H canvas with renderer_vispy and crops
 // the image out of it; BopDepthRenderer does the same with the same numbers, rasterising only
 // each object's projected rectangle on that canvas.
 void compute_bop(render::BopDepthRenderer& renderer, const datasets::Camera& camera,
                  const std::vector<BopObject>& objects, const VisibilityOptions& options,
-                 const cv::Mat& measured_depth_mm, ImageVisibility* result, ImageMasks* masks) {
+                 const cv::Mat& measured_depth_mm, ImageVisibility* result, ImageMasks* masks,
+                 cv::Mat* gt_depth_mm) {
   const int width = camera.width, height = camera.height;
   const BopCamera bop_camera{camera.fx(), camera.fy(), camera.cx(), camera.cy()};
   const BopVisibilityOptions bop_options{
@@ -121,6 +151,7 @@ void compute_bop(render::BopDepthRenderer& renderer, const datasets::Camera& cam
   const cv::Rect image_on_canvas(width, height, width, height);
   // The measured distances once per image; per object, only its window is processed.
   const cv::Mat test_distance = visibility::depth_to_distance(measured_depth_mm, bop_camera);
+  if (gt_depth_mm) *gt_depth_mm = cv::Mat(height, width, CV_32F, cv::Scalar(0));
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const BopObject& object = objects[i];
     const cv::Rect rect =
@@ -144,6 +175,7 @@ void compute_bop(render::BopDepthRenderer& renderer, const datasets::Camera& cam
       window = cv::Rect(0, 0, 1, 1);
       model_mm = cv::Mat(1, 1, CV_32F, cv::Scalar(0));
     }
+    if (gt_depth_mm) nearest_surface(model_mm, (*gt_depth_mm)(window));
     cv::Mat visib;
     ObjectVisibility& result_object = result->objects[i];
     result_object.info =
@@ -189,6 +221,7 @@ ImageVisibility compute_image_visibility(render::Renderer& renderer, const datas
         "compute_image_visibility computes the rendered mode; BOP modes need "
         "compute_bop_image_visibility");
   }
+  check_drawable(camera, kVisibilityCanvasFactor, renderer.max_target_size(), where);
   const render::Intrinsics intrinsics =
       render::Intrinsics::from_camera(camera, options.pixel_center);
   check_in_front_of_camera(objects, intrinsics.near_m, where);
@@ -205,12 +238,14 @@ ImageVisibility compute_bop_image_visibility(render::BopDepthRenderer& renderer,
                                              const std::vector<BopObject>& objects,
                                              const VisibilityOptions& options,
                                              const cv::Mat& measured_depth_mm,
-                                             const std::string& where, ImageMasks* masks) {
+                                             const std::string& where, ImageMasks* masks,
+                                             cv::Mat* gt_depth_mm) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument(why);
   if (!options.is_bop()) {
     throw std::invalid_argument("compute_bop_image_visibility needs a BOP mode (bop19, bop18)");
   }
+  check_drawable(camera, kVisibilityCanvasFactor, renderer.max_target_size(), where);
   const double near_mm = near_plane_m() * 1000.0;
   for (std::size_t i = 0; i < objects.size(); ++i) {
     const BopObject& object = objects[i];
@@ -241,8 +276,9 @@ ImageVisibility compute_bop_image_visibility(render::BopDepthRenderer& renderer,
   ImageVisibility result;
   result.objects.resize(objects.size());
   prepare_masks(objects.size(), masks);
+  if (gt_depth_mm) *gt_depth_mm = cv::Mat(camera.height, camera.width, CV_32F, cv::Scalar(0));
   if (objects.empty()) return result;
-  compute_bop(renderer, camera, objects, options, measured_depth_mm, &result, masks);
+  compute_bop(renderer, camera, objects, options, measured_depth_mm, &result, masks, gt_depth_mm);
   return finish(std::move(result));
 }
 

@@ -12,7 +12,9 @@
 #include <clutterscope/render/model_cache.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <clutterscope/tools/batch.hpp>
+#include <clutterscope/visibility/image_visibility.hpp>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <optional>
@@ -170,6 +172,10 @@ std::set<int> support_cycle_members(int count, const std::vector<std::pair<int, 
 
 }  // namespace
 
+std::string to_string(Observation observation) {
+  return observation == Observation::kMeasured ? "measured" : "synthetic";
+}
+
 render::ModelCacheOptions EstimateOptions::model_cache() const {
   render::ModelCacheOptions cache;
   cache.proxy_triangles = static_cast<std::size_t>(proxy_triangles);
@@ -198,7 +204,7 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (!(icp_max_distance_m > 0)) return fail("ICP correspondence distance must be > 0");
   if (!(support_z_sigma_m > 0) || !(non_contact_floor > 0) || !(min_bandwidth_m > 0))
     return fail("support sigma, non-contact floor and bandwidth floor must be > 0");
-  return true;
+  return depth.IsValid(why);
 }
 
 struct SceneEstimator::State {
@@ -276,24 +282,42 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
     extent[i] = datasets::support_box(model, model_to_support).bounds.sizes();
   }
 
-  // Observation and labels: measured depth, else GT depth through the sensor model.
+  // Observation and labels: the measured depth (checked against the GT render for a wrong
+  // depth_scale), or the GT depth through the sensor model when synthetic ones are asked for.
+  const std::string where = datasets::location(view.key.scene_id, view.key.im_id);
+  visibility::check_drawable(view.camera, 1, s.renderer.max_target_size(), where);
   const render::Intrinsics image = render::Intrinsics::from_camera(view.camera);
   cv::Mat depth;
   cv::Mat labels;
   const bool need_labels = view.detections.empty();
-  if (!view.depth_path.empty()) {
-    depth = datasets::load_depth(view);
-    result.observation = "measured";
+  const bool measured = options.observation == Observation::kMeasured;
+  result.observation = to_string(options.observation);
+  datasets::SceneView scaled = view;
+  if (measured) {
+    if (view.depth_path.empty()) {
+      char expected[32];
+      std::snprintf(expected, sizeof expected, "depth/%06d.png", view.key.im_id);
+      char scene[16];
+      std::snprintf(scene, sizeof scene, "%06d", view.key.scene_id);
+      throw datasets::DatasetError(
+          s.dataset.root() / view.key.split / scene,
+          where + "no depth image (" + expected +
+              "); use --observation synthetic to estimate from depth synthesised from the GT");
+    }
+    if (options.depth.depth_scale) scaled.camera.depth_scale = *options.depth.depth_scale;
+    depth = datasets::load_depth(scaled);
   }
-  if (depth.empty() || need_labels) {
+  if (!measured || need_labels || options.depth.check) {
     const render::DepthLabelImage clean =
         s.renderer.render(image, render::scene_instances(view, s.models));
     labels = clean.labels;
-    if (depth.empty()) {
+    if (measured) {
+      datasets::check_depth_scale(depth, clean.depth, scaled.camera.depth_scale, options.depth,
+                                  view.depth_path, where);
+    } else {
       std::mt19937_64 sensor_rng = item_rng(options.seed, view.key, "sensor");
       depth =
           datasets::apply_sensor(clean.depth, view.camera, datasets::SensorOptions{}, sensor_rng);
-      result.observation = "synthetic";
     }
   }
   std::vector<datasets::Detection> detections = view.detections;

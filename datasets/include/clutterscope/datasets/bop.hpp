@@ -36,8 +36,9 @@ struct BopOpenOptions {
 // JSON at a time, so memory does not grow with the number of images. load() is thread-safe;
 // attach_detections() is not (call it before starting workers).
 //
-// Image size: BOP's scene_camera.json has none, so it is read from the header of the scene's
-// first depth (else rgb/gray) image, else from camera.json at the dataset root.
+// Image size: BOP's scene_camera.json has none, so it is camera.json's width and height at the
+// dataset root, else the header of the scene's first rgb/gray image, else of its first depth
+// image. A depth image of another size is refused by load_depth (never rescaled or trusted).
 class BopDataset {
  public:
   // Throws DatasetError when models/models_info.json (or models_names.json, camera.json when

@@ -74,6 +74,11 @@ class BopDepthRenderer {
   static cv::Rect projected_rect(const BopModel& model, const Eigen::Matrix3d& R,
                                  const Eigen::Vector3d& t, const BopTarget& target);
 
+  // The largest target width and height this context draws (GL_MAX_RENDERBUFFER_SIZE,
+  // GL_MAX_VIEWPORT_DIMS, GL_MAX_TEXTURE_SIZE, the smallest); a larger target throws
+  // RenderError.
+  int max_target_size() const;
+
  private:
   struct State;
   std::unique_ptr<State> state_;

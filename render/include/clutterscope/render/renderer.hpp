@@ -187,6 +187,11 @@ class Renderer {
   // target; the whole target when a corner of the bounds is closer than near_m (or behind).
   static cv::Rect projected_rect(const Intrinsics& intrinsics, const Instance& instance);
 
+  // The largest target width and height this context draws (GL_MAX_RENDERBUFFER_SIZE,
+  // GL_MAX_VIEWPORT_DIMS, GL_MAX_TEXTURE_SIZE, the smallest); a larger target throws
+  // RenderError.
+  int max_target_size() const;
+
  private:
   struct State;
   std::unique_ptr<State> state_;

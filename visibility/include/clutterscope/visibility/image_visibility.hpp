@@ -73,15 +73,28 @@ struct BopObject {
 // BOP modes (bop19, bop18): calc_gt_info.py against the measured depth, each object rendered
 // alone by render::BopDepthRenderer with bop_toolkit's numbers. Throws as
 // compute_image_visibility does, and when the measured depth (load_bop_depth_mm) is missing or
-// not of the camera's size.
+// not of the camera's size. With `gt_depth_mm`, also gives the GT scene depth in the image
+// (CV_32F mm, 0 = background: the per-pixel minimum of the objects rendered alone, from the
+// renders already made), for datasets::check_depth_scale.
 ImageVisibility compute_bop_image_visibility(render::BopDepthRenderer& renderer,
                                              const datasets::Camera& camera,
                                              const std::vector<BopObject>& objects,
                                              const VisibilityOptions& options,
                                              const cv::Mat& measured_depth_mm,
-                                             const std::string& where, ImageMasks* masks = nullptr);
+                                             const std::string& where, ImageMasks* masks = nullptr,
+                                             cv::Mat* gt_depth_mm = nullptr);
 
 // The renderer's near plane (metres) that both functions require objects to be beyond.
 double near_plane_m();
+
+// Both visibility functions draw on BOP's 3W x 3H canvas (px_count_all); the estimator draws
+// the image itself (canvas_factor 1).
+inline constexpr int kVisibilityCanvasFactor = 3;
+
+// Throws datasets::DatasetError (starting with `where`) naming the image size and the limit
+// when canvas_factor x the camera's image exceeds max_target_size (the renderer's
+// max_target_size()) in width or height: checked before anything of that size is allocated.
+void check_drawable(const datasets::Camera& camera, int canvas_factor, int max_target_size,
+                    const std::string& where);
 
 }  // namespace clutterscope::visibility

@@ -6,8 +6,10 @@
 // rendered unary of Eq. 6), runs NBP and post-processes each belief by ICP and fusion.
 //
 // Orientation is taken from the GT (d = 3, the paper's setting); positions are object centres
-// (the centre of the model's bounding box). Observation: the dataset's measured depth, else a
-// synthetic one (GT depth through datasets::apply_sensor). Detections: the attached ones, else
+// (the centre of the model's bounding box). Observation: the dataset's measured depth (an image
+// without one is bad input), or with Observation::kSynthetic the GT depth through
+// datasets::apply_sensor; measured depth is checked against the GT render for a wrong
+// depth_scale (datasets::check_depth_scale). Detections: the attached ones, else
 // the synthetic detector on the rendered GT labels. Random streams are per image
 // (tools::item_rng of seed and image), so results do not depend on threads or shards.
 //
@@ -16,6 +18,7 @@
 #include <Eigen/Geometry>
 #include <chrono>
 #include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/datasets/depth_check.hpp>
 #include <clutterscope/datasets/scene.hpp>
 #include <clutterscope/estimator/mixture.hpp>
 #include <clutterscope/estimator/nbp.hpp>
@@ -31,7 +34,15 @@
 
 namespace clutterscope::tools {
 
+// What the estimator observes: the dataset's depth images, or depth synthesised from the GT
+// render through the sensor model (simulate, or --observation synthetic).
+enum class Observation { kMeasured, kSynthetic };
+
+std::string to_string(Observation observation);  // "measured", "synthetic"
+
 struct EstimateOptions {
+  Observation observation = Observation::kMeasured;
+  datasets::DepthCheckOptions depth;  // measured observations: --depth-scale, --no-depth-check
   int particles = 100;   // M
   int iterations = 15;   // NBP iterations
   int gibbs_sweeps = 5;  // kappa
