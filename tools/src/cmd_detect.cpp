@@ -13,6 +13,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "output_folder.hpp"
 #include "dataset_options.hpp"
 #include "generate_pipeline.hpp"
 #include "progress.hpp"
@@ -34,6 +35,7 @@ struct DetectArguments {
 void run_detect(const DetectArguments& arguments) {
   std::string why;
   if (!arguments.detector.IsValid(&why)) throw UsageError(why);
+  claim_output_file(arguments.out);
   const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
   datasets::DatasetSelection selection;
   selection.splits = {arguments.split};

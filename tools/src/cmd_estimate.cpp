@@ -20,6 +20,7 @@
 
 #include "commands.hpp"
 #include "dataset_options.hpp"
+#include "input_digest.hpp"
 
 namespace clutterscope::tools {
 
@@ -311,6 +312,7 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
   job.fingerprint["proxy_tolerance_mm"] = 1e3 * e.proxy_tolerance_m;
   job.fingerprint["bandwidth_floor_mm"] = 1e3 * e.min_bandwidth_m;
   job.fingerprint["icp_max_distance_mm"] = 1e3 * e.icp_max_distance_m;
+  job.input_digest = bop_image_digest(dataset);
   job.make_worker = [&dataset, &arguments]() -> ItemFunction {
     auto worker = std::make_shared<EstimateWorker>(dataset, arguments);
     return [worker](const datasets::ImageKey& key) { return worker->run(key); };
