@@ -4,8 +4,8 @@
 
 #include <chrono>
 #include <cstdio>
-#include <functional>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -137,9 +137,8 @@ TEST(FileDigestCache, MissingAndEmptyFilesDiffer) {
 class BopImageDigest : public ::testing::Test {
  protected:
   void SetUp() override {
-    root_ = fresh_dir("digest_tray6_" + std::string(::testing::UnitTest::GetInstance()
-                                                         ->current_test_info()
-                                                         ->name()));
+    root_ = fresh_dir("digest_tray6_" +
+                      std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::copy(fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray6", root_, fs::copy_options::recursive);
   }
   // Digests of every image of the dataset as it is now (a new BopDataset: a new run).
@@ -187,23 +186,27 @@ TEST_F(BopImageDigest, AMovedObjectChangesOnlyItsImage) {
   const auto before = digests();
   edit_json(
       scene_file(2, "scene_gt.json"),
-      [](nlohmann::json& gt) { gt["0"][1]["cam_t_m2c"][0] = gt["0"][1]["cam_t_m2c"][0].get<double>() + 30.0; },
+      [](nlohmann::json& gt) {
+        gt["0"][1]["cam_t_m2c"][0] = gt["0"][1]["cam_t_m2c"][0].get<double>() + 30.0;
+      },
       1);
   EXPECT_EQ(changed(before, digests()), std::vector<int>{2});
 }
 
 TEST_F(BopImageDigest, ARewrittenFileWithTheSameValuesChangesNothing) {
   const auto before = digests();
-  edit_json(scene_file(3, "scene_gt.json"), [](nlohmann::json&) {}, 4);
-  edit_json(scene_file(3, "scene_camera.json"), [](nlohmann::json&) {}, -1);
+  edit_json(
+      scene_file(3, "scene_gt.json"), [](nlohmann::json&) {}, 4);
+  edit_json(
+      scene_file(3, "scene_camera.json"), [](nlohmann::json&) {}, -1);
   EXPECT_EQ(changed(before, digests()), std::vector<int>{});
 }
 
 TEST_F(BopImageDigest, CameraGraphDepthAndModelsAreInputs) {
   auto before = digests();
   edit_json(
-      scene_file(1, "scene_camera.json"), [](nlohmann::json& camera) { camera["0"]["depth_scale"] = 1.0; },
-      1);
+      scene_file(1, "scene_camera.json"),
+      [](nlohmann::json& camera) { camera["0"]["depth_scale"] = 1.0; }, 1);
   auto after = digests();
   EXPECT_EQ(changed(before, after), std::vector<int>{1});
 
@@ -214,7 +217,8 @@ TEST_F(BopImageDigest, CameraGraphDepthAndModelsAreInputs) {
         nlohmann::json& pairs = graph["0"]["non_contact"];
         pairs = pairs.empty() ? nlohmann::json::array({nlohmann::json::array({0, 1})})
                               : nlohmann::json::array();
-      }, 1);
+      },
+      1);
   after = digests();
   EXPECT_EQ(changed(before, after), std::vector<int>{4});
 
@@ -252,7 +256,8 @@ TEST_F(BopImageDigest, CameraGraphDepthAndModelsAreInputs) {
   edit_json(
       root_ / "models" / "models_info.json",
       [obj_id](nlohmann::json& info) {
-        info[std::to_string(obj_id)]["diameter"] = info[std::to_string(obj_id)]["diameter"].get<double>() + 1.0;
+        info[std::to_string(obj_id)]["diameter"] =
+            info[std::to_string(obj_id)]["diameter"].get<double>() + 1.0;
       },
       1);
   after = digests();

@@ -87,8 +87,8 @@ TEST(OutputFolder, FoldersInsideAResultsFolderBelongToIt) {
   batch_folder(report / "visibility", "visibility");
   // The user's own run into the report's step folder: refused, although the step folder
   // holds visibility results.
-  for (const fs::path& dir : {report / "visibility", report / "beliefs" / "test_000000_000000",
-                              report / "mine"}) {
+  for (const fs::path& dir :
+       {report / "visibility", report / "beliefs" / "test_000000_000000", report / "mine"}) {
     const std::string message = refusal(dir, "visibility");
     EXPECT_NE(message.find("is inside " + report.string()), std::string::npos) << message;
     EXPECT_NE(message.find("results of `report`"), std::string::npos) << message;

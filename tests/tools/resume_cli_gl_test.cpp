@@ -10,7 +10,9 @@
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "cli_run.hpp"
 #include "datasets/bop_fixture_support.hpp"
@@ -136,7 +138,8 @@ TEST_F(ResumeCli, CommandsRefuseFoldersOfOtherCommandsAndDatasets) {
     const CommandRun run = run_merged(command);
     EXPECT_EQ(run.exit_code, 2) << command << "\n" << run.output;
     EXPECT_NE(run.output.find("results of `visibility` (" + marker + ")"), std::string::npos)
-        << command << "\n" << run.output;
+        << command << "\n"
+        << run.output;
   }
   EXPECT_TRUE(final_files(vis) == vis_files) << "a refused command touched the folder";
 

@@ -39,13 +39,13 @@ std::uint32_t read32(const unsigned char* p) {
          static_cast<std::uint32_t>(p[2]) << 16 | static_cast<std::uint32_t>(p[3]) << 24;
 }
 
-std::uint64_t round(std::uint64_t acc, std::uint64_t input) {
+std::uint64_t xxh_round(std::uint64_t acc, std::uint64_t input) {
   acc += input * kPrime2;
   return rotl(acc, 31) * kPrime1;
 }
 
 std::uint64_t merge_round(std::uint64_t acc, std::uint64_t lane) {
-  acc ^= round(0, lane);
+  acc ^= xxh_round(0, lane);
   return acc * kPrime1 + kPrime4;
 }
 
@@ -64,8 +64,8 @@ bool stat_file(const fs::path& path, FileState* state) {
   struct stat info {};
   if (::stat(path.c_str(), &info) != 0 || !S_ISREG(info.st_mode)) return false;
   state->size = static_cast<std::uint64_t>(info.st_size);
-  state->mtime_ns = static_cast<std::int64_t>(info.st_mtim.tv_sec) * 1'000'000'000 +
-                    info.st_mtim.tv_nsec;
+  state->mtime_ns =
+      static_cast<std::int64_t>(info.st_mtim.tv_sec) * 1'000'000'000 + info.st_mtim.tv_nsec;
   return true;
 }
 
@@ -103,7 +103,9 @@ class Digest {
     return *this;
   }
   Digest& add(std::int64_t value) { return add(static_cast<std::uint64_t>(value)); }
-  Digest& add(int value) { return add(static_cast<std::uint64_t>(static_cast<std::int64_t>(value))); }
+  Digest& add(int value) {
+    return add(static_cast<std::uint64_t>(static_cast<std::int64_t>(value)));
+  }
   Digest& add(bool value) { return add(static_cast<std::uint64_t>(value ? 1 : 0)); }
   Digest& add(double value) {
     std::uint64_t bits = 0;
@@ -179,13 +181,15 @@ void Xxh64::update(const void* data, std::size_t size) {
   if (buffered_ > 0) {
     const std::size_t fill = 32 - buffered_;
     std::memcpy(buffer_ + buffered_, bytes, fill);
-    for (int lane = 0; lane < 4; ++lane) lanes_[lane] = round(lanes_[lane], read64(buffer_ + 8 * lane));
+    for (int lane = 0; lane < 4; ++lane)
+      lanes_[lane] = xxh_round(lanes_[lane], read64(buffer_ + 8 * lane));
     bytes += fill;
     size -= fill;
     buffered_ = 0;
   }
   for (; size >= 32; bytes += 32, size -= 32) {
-    for (int lane = 0; lane < 4; ++lane) lanes_[lane] = round(lanes_[lane], read64(bytes + 8 * lane));
+    for (int lane = 0; lane < 4; ++lane)
+      lanes_[lane] = xxh_round(lanes_[lane], read64(bytes + 8 * lane));
   }
   if (size > 0) std::memcpy(buffer_, bytes, size);
   buffered_ = size;
@@ -202,7 +206,8 @@ std::uint64_t Xxh64::digest() const {
   hash += total_;
   const unsigned char* p = buffer_;
   std::size_t left = buffered_;
-  for (; left >= 8; p += 8, left -= 8) hash = rotl(hash ^ round(0, read64(p)), 27) * kPrime1 + kPrime4;
+  for (; left >= 8; p += 8, left -= 8)
+    hash = rotl(hash ^ xxh_round(0, read64(p)), 27) * kPrime1 + kPrime4;
   if (left >= 4) {
     hash = rotl(hash ^ (static_cast<std::uint64_t>(read32(p)) * kPrime1), 23) * kPrime2 + kPrime3;
     p += 4;
@@ -311,7 +316,9 @@ ImageDigest bop_image_digest(const datasets::BopDataset& dataset) {
     try {
       view = dataset.load(key);
     } catch (const datasets::DatasetError& error) {
-      return digest.add(std::string_view("bad image: ")).add(std::string_view(error.what())).value();
+      return digest.add(std::string_view("bad image: "))
+          .add(std::string_view(error.what()))
+          .value();
     }
     add_view(digest, view);
     for (const fs::path* image : {&view.depth_path, &view.rgb_path}) {
@@ -320,7 +327,8 @@ ImageDigest bop_image_digest(const datasets::BopDataset& dataset) {
     }
     std::set<int> shown;
     for (const datasets::GtInstance& object : view.objects) shown.insert(object.obj_id);
-    for (const int obj_id : shown) digest.add(obj_id).add(files.digest(dataset.model(obj_id).mesh_path));
+    for (const int obj_id : shown)
+      digest.add(obj_id).add(files.digest(dataset.model(obj_id).mesh_path));
     return digest.value();
   };
 }

@@ -56,7 +56,6 @@ bool is_marker_folder(const std::string& name) {
 }
 
 std::string describe(const FolderOwner& owner) {
-  if (owner.command == "dataset") return "a dataset (" + owner.marker.string() + ")";
   return "the results of `" + owner.command + "` (" + owner.marker.string() + ")";
 }
 
@@ -98,6 +97,10 @@ void claim_output_folder(const fs::path& dir, const std::string& command) {
   }
   if (const std::optional<FolderOwner> owner = folder_owner(path)) {
     if (owner->command == command) return;
+    if (owner->command == "dataset") {
+      throw UsageError(dir.string() + " is a dataset (" + owner->marker.string() +
+                       "): results are not written into a dataset; choose another --out");
+    }
     throw UsageError(dir.string() + " holds " + describe(*owner) + "; choose another --out");
   }
   std::vector<std::string> entries;

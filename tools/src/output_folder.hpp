@@ -18,7 +18,7 @@
 namespace clutterscope::tools {
 
 struct FolderOwner {
-  std::string command;            // "visibility", "report", ..., or "dataset"
+  std::string command;           // "visibility", "report", ..., or "dataset"
   std::filesystem::path marker;  // the file that says so
 };
 
