@@ -1,7 +1,5 @@
 #include "fake_batch_support.hpp"
 
-#include "../../tools/src/batch_storage.hpp"
-
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -13,6 +11,8 @@
 #include <memory>
 #include <sstream>
 #include <thread>
+
+#include "../../tools/src/batch_storage.hpp"
 
 namespace clutterscope::tools::testing {
 
@@ -90,8 +90,8 @@ struct FakeWorker {
       throw datasets::DatasetError(
           "scene_gt.json", datasets::location(key.scene_id, key.im_id) + "cam_t_m2c is broken");
     }
-    const double value = std::uniform_real_distribution<double>(0.0, 1.0)(rng) +
-                         input_version(options, key);
+    const double value =
+        std::uniform_real_distribution<double>(0.0, 1.0)(rng) + input_version(options, key);
     ItemOutput output;
     output.tables.resize(2);
     output.tables[0] = CsvRow()

@@ -317,7 +317,8 @@ TEST_F(ReportCli, OtherCommandsRefuseTheReportFolderAndItsSubfolders) {
     const CommandRun run_result = run(command);
     EXPECT_EQ(run_result.exit_code, 2) << command << "\n" << run_result.errors;
     EXPECT_NE(run_result.errors.find("results of `report` (" + marker + ")"), std::string::npos)
-        << command << "\n" << run_result.errors;
+        << command << "\n"
+        << run_result.errors;
     EXPECT_NE(run_result.errors.find("choose another --out"), std::string::npos)
         << run_result.errors;
   }

@@ -80,7 +80,7 @@ struct WorkQueue {
   std::atomic<std::size_t> failed{0};
   std::mutex mutex;  // guards first_error and item_seconds
   std::exception_ptr first_error;
-  double item_seconds = 0.0;  // summed over items, for the mean time per image
+  double item_seconds = 0.0;         // summed over items, for the mean time per image
   FileDigestCache* files = nullptr;  // when the job has an input digest
 
   void add_item_seconds(double seconds) {

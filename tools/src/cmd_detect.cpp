@@ -13,9 +13,9 @@
 #include <memory>
 
 #include "commands.hpp"
-#include "output_folder.hpp"
 #include "dataset_options.hpp"
 #include "generate_pipeline.hpp"
+#include "output_folder.hpp"
 #include "progress.hpp"
 
 namespace clutterscope::tools {
