@@ -84,7 +84,7 @@ TEST_F(ResumeCli, AnEditedSceneGtRecomputesItsImageAndMatchesAFreshRun) {
   ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
   EXPECT_NE(resumed.output.find("(1 computed, 5 resumed, 0 failed)"), std::string::npos)
       << resumed.output;
-  EXPECT_NE(resumed.output.find("1 finished images are recomputed: their inputs changed"),
+  EXPECT_NE(resumed.output.find("finished images recomputed because their inputs changed: 1"),
             std::string::npos)
       << resumed.output;
   EXPECT_NE(resumed.output.find("scene 2, image 0"), std::string::npos) << resumed.output;

@@ -255,8 +255,8 @@ BatchResult run_batch(const BatchJob& job, const BatchOptions& options) {
   if (job.input_digest) files.save();
   if (first_changed && !options.quiet) {
     std::fprintf(stderr,
-                 "%s: %zu finished images are recomputed: their inputs changed since they were "
-                 "computed (the first: %s)\n",
+                 "%s: finished images recomputed because their inputs changed: %zu (the first: "
+                 "%s)\n",
                  job.output->command.c_str(), result.changed, describe(*first_changed).c_str());
   }
 
