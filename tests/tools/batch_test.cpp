@@ -160,6 +160,54 @@ TEST(Batch, ResumeAfterKill9GivesIdenticalBytes) {
   expect_same_final_files(reference, out);
 }
 
+TEST(Batch, ResumeRecomputesTheItemsWhoseInputsChanged) {
+  FakeJobOptions fake;
+  fake.scenes = 3;
+  fake.images_per_scene = 20;
+  const fs::path out = fresh_dir("inputs_changed");
+  run_batch(fake_job(out, fake), options_for(out, 2));
+  const std::string before = read_file(out / "a.csv");
+
+  FakeJobOptions edited = fake;
+  edited.input_versions = {{2, 1}};  // scene 2's inputs changed: its values change
+  const BatchResult result = run_batch(fake_job(out, edited), options_for(out, 2));
+  EXPECT_TRUE(result.complete);
+  EXPECT_EQ(result.changed, 20u);
+  EXPECT_EQ(result.computed, 20u);
+  EXPECT_EQ(result.resumed, 40u);
+  EXPECT_NE(read_file(out / "a.csv"), before);
+  const fs::path fresh = fresh_dir("inputs_changed_fresh");
+  run_batch(fake_job(fresh, edited), options_for(fresh, 1));
+  expect_same_final_files(fresh, out);
+
+  // Unchanged inputs: everything resumes.
+  const BatchResult again = run_batch(fake_job(out, edited), options_for(out, 1));
+  EXPECT_EQ(again.changed, 0u);
+  EXPECT_EQ(again.resumed, 60u);
+  expect_same_final_files(fresh, out);
+}
+
+TEST(Batch, AChangedItemThatNowFailsDoesNotKeepItsOldResult) {
+  FakeJobOptions fake;
+  fake.scenes = 2;
+  fake.images_per_scene = 10;
+  const fs::path out = fresh_dir("changed_fails");
+  run_batch(fake_job(out, fake), options_for(out, 1));
+
+  FakeJobOptions edited = fake;
+  edited.input_versions = {{1, 1}};
+  edited.fail_modulo = 5;  // images 1 and 6 of every scene now fail when computed
+  BatchOptions options = options_for(out, 2);
+  options.keep_going = true;
+  const BatchResult result = run_batch(fake_job(out, edited), options);
+  EXPECT_EQ(result.changed, 10u);
+  EXPECT_EQ(result.resumed, 10u);  // scene 2 is unchanged: its finished parts stay
+  EXPECT_EQ(result.failed, 2u);    // scene 1's images 1 and 6, not their stale results
+  const auto summary = nlohmann::json::parse(read_file(out / "summary.json"));
+  EXPECT_EQ(summary["totals"]["failed"], 2);
+  EXPECT_EQ(summary["totals"]["failures"][0]["scene_id"], 1);
+}
+
 TEST(Batch, ShardsMergeToTheBytesOfOneRun) {
   FakeJobOptions fake;
   fake.scenes = 3;

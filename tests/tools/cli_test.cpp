@@ -112,8 +112,9 @@ TEST(Cli, MergeWithMissingImagesExitsThree) {
   std::ofstream(shard / ".batch" / "job.json")
       << R"({"format": 1, "fingerprint": {"command": "visibility", "tool_version": "x",)"
       << R"( "items": {"count": 2, "fnv1a64": "0"}, "options": {}}})";
-  const CommandRun result =
-      run_merged("merge " + shard.string() + " --out " + (shard / "merged").string());
+  // (Not into shard/merged: a batch folder's subfolders belong to it.)
+  const CommandRun result = run_merged("merge " + shard.string() + " --out " +
+                                       testing::fresh_dir("cli_missing_merged").string());
   EXPECT_EQ(result.exit_code, 3) << result.output;
   EXPECT_NE(result.output.find("2 of 2 items have no result (e.g. test/000001/000000"),
             std::string::npos)

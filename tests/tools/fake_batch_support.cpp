@@ -12,6 +12,8 @@
 #include <sstream>
 #include <thread>
 
+#include "../../tools/src/batch_storage.hpp"
+
 namespace clutterscope::tools::testing {
 
 namespace fs = std::filesystem;
@@ -63,6 +65,11 @@ class FakeSummary : public SummaryBuilder {
   std::string scenes_;
 };
 
+int input_version(const FakeJobOptions& options, const ImageKey& key) {
+  const auto found = options.input_versions.find(key.scene_id);
+  return found == options.input_versions.end() ? 0 : found->second;
+}
+
 // One per worker thread; checks it is used and destroyed on the thread that created it.
 struct FakeWorker {
   FakeWorker(fs::path out, FakeJobOptions options)
@@ -83,7 +90,8 @@ struct FakeWorker {
       throw datasets::DatasetError(
           "scene_gt.json", datasets::location(key.scene_id, key.im_id) + "cam_t_m2c is broken");
     }
-    const double value = std::uniform_real_distribution<double>(0.0, 1.0)(rng);
+    const double value =
+        std::uniform_real_distribution<double>(0.0, 1.0)(rng) + input_version(options, key);
     ItemOutput output;
     output.tables.resize(2);
     output.tables[0] = CsvRow()
@@ -142,6 +150,10 @@ BatchJob fake_job(const fs::path& out_dir, const FakeJobOptions& options) {
   job.output = &fake_output();
   job.items = fake_items(options.scenes, options.images_per_scene);
   job.fingerprint = {{"option", options.option}, {"padding", options.padding_bytes}};
+  job.input_digest = [options](const ImageKey& key, FileDigestCache&) {
+    return splitmix64(static_cast<std::uint64_t>(key.scene_id) << 32 |
+                      static_cast<std::uint64_t>(input_version(options, key)));
+  };
   job.make_worker = [out_dir, options]() -> ItemFunction {
     auto worker = std::make_shared<FakeWorker>(out_dir, options);
     return [worker](const ImageKey& key) { return worker->run(key); };

@@ -5,6 +5,7 @@
 
 #include <clutterscope/tools/batch.hpp>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,9 @@ struct FakeJobOptions {
   int max_delay_us = 0;       // random per-item delay, so workers finish out of order
   bool write_files = false;   // each item writes OUT/extra/SCENE_IM.txt and lists it
   std::string option = "a";   // recorded in the fingerprint
+  // Version of each scene's inputs (absent: 0): added to the scene's values and digested by
+  // the job's input_digest, as an edited scene file would be.
+  std::map<int, int> input_versions;
 };
 
 // The registered output spec of the command "fake": tables a.csv and b.csv, a summary that

@@ -47,11 +47,15 @@ std::vector<std::string> lines_of(const std::string& text) {
 
 std::size_t rows_of(const fs::path& csv) { return lines_of(read_text(csv)).size() - 1; }
 
-// Every file of a report folder except run.json (this run's timing), by relative path.
+// Every file of a report folder except run.json (this run's timing) and the steps' cache of
+// input file hashes (file_digests.tsv: by file time), by relative path.
 std::map<std::string, std::string> folder_bytes(const fs::path& dir) {
   std::map<std::string, std::string> files;
   for (const auto& entry : fs::recursive_directory_iterator(dir)) {
-    if (!entry.is_regular_file() || entry.path().filename() == "run.json") continue;
+    if (!entry.is_regular_file() || entry.path().filename() == "run.json" ||
+        entry.path().filename() == "file_digests.tsv") {
+      continue;
+    }
     files[fs::relative(entry.path(), dir).generic_string()] = read_text(entry.path());
   }
   return files;
@@ -292,6 +296,37 @@ TEST_F(ReportCli, RefusesAFolderOfAnotherDatasetOrOtherOptions) {
   }
   // Nothing was mixed in: every result file is as the report left it.
   const std::map<std::string, std::string> bytes = folder_bytes(report_dir());
+  for (const auto& [file, content] : *first_bytes_) {
+    EXPECT_TRUE(bytes.count(file) && bytes.at(file) == content) << file;
+  }
+}
+
+TEST_F(ReportCli, OtherCommandsRefuseTheReportFolderAndItsSubfolders) {
+  const std::string data = "\"" + dataset().string() + "\"";
+  const std::string marker = (report_dir() / ".report" / "job.json").string();
+  const auto out = [](const fs::path& dir) { return " --out \"" + dir.string() + "\""; };
+  const std::vector<std::string> refused = {
+      "visibility " + data + out(report_dir()),
+      "simulate " + data + " --scene 0 --image 0 --quiet" + out(report_dir()),
+      "visibility " + data + out(report_dir() / "visibility"),
+      "estimate " + data + out(report_dir() / "estimate"),
+      "estimate " + data + out(report_dir() / "beliefs" / "mine"),
+      "merge \"" + (report_dir() / "visibility").string() + "\"" + out(report_dir()),
+      "render " + data + " --scene 0 --image 0" + out(report_dir() / "render"),
+      "detect " + data + out(report_dir() / "detections.json"),
+  };
+  for (const std::string& command : refused) {
+    const CommandRun run_result = run(command);
+    EXPECT_EQ(run_result.exit_code, 2) << command << "\n" << run_result.errors;
+    EXPECT_NE(run_result.errors.find("results of `report` (" + marker + ")"), std::string::npos)
+        << command << "\n"
+        << run_result.errors;
+    EXPECT_NE(run_result.errors.find("choose another --out"), std::string::npos)
+        << run_result.errors;
+  }
+  // The report's files are as it left them.
+  const std::map<std::string, std::string> bytes = folder_bytes(report_dir());
+  EXPECT_EQ(bytes.size(), first_bytes_->size());
   for (const auto& [file, content] : *first_bytes_) {
     EXPECT_TRUE(bytes.count(file) && bytes.at(file) == content) << file;
   }

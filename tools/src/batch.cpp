@@ -13,6 +13,8 @@
 #include <thread>
 
 #include "batch_storage.hpp"
+#include "input_digest.hpp"
+#include "output_folder.hpp"
 #include "progress.hpp"
 
 namespace clutterscope::tools {
@@ -78,7 +80,8 @@ struct WorkQueue {
   std::atomic<std::size_t> failed{0};
   std::mutex mutex;  // guards first_error and item_seconds
   std::exception_ptr first_error;
-  double item_seconds = 0.0;  // summed over items, for the mean time per image
+  double item_seconds = 0.0;         // summed over items, for the mean time per image
+  FileDigestCache* files = nullptr;  // when the job has an input digest
 
   void add_item_seconds(double seconds) {
     std::lock_guard<std::mutex> lock(mutex);
@@ -109,6 +112,9 @@ void run_worker(const BatchJob& job, const BatchOptions& options, WorkQueue& que
       const auto start = std::chrono::steady_clock::now();
       std::optional<std::string> failure;
       ItemOutput output;
+      // Before the item runs: a file edited meanwhile makes the next run recompute it.
+      std::optional<std::uint64_t> digest;
+      if (job.input_digest) digest = job.input_digest(key, *queue.files);
       try {
         output = process(key);
         check_output(output, *job.output, key);
@@ -123,7 +129,7 @@ void run_worker(const BatchJob& job, const BatchOptions& options, WorkQueue& que
         write_failed_part(options.out_dir, key, *failure);
         ++queue.failed;
       } else {
-        write_ok_part(options.out_dir, key, output);
+        write_ok_part(options.out_dir, key, output, digest);
         queue.add_item_seconds(
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
       }
@@ -147,6 +153,7 @@ void write_run_json(const fs::path& out_dir, const std::string& command,
       {"items_in_scope", in_scope},
       {"computed", result.computed},
       {"resumed", result.resumed},
+      {"inputs_changed", result.changed},
       {"failed", result.failed},
       {"complete", result.complete},
       {"seconds", json_rounded(result.seconds, 3)},
@@ -216,20 +223,41 @@ BatchResult run_batch(const BatchJob& job, const BatchOptions& options) {
     throw std::logic_error("run_batch: items must be sorted and unique");
   }
 
+  claim_output_folder(options.out_dir, job.output->command);
   const BatchFolder folder =
       BatchFolder::prepare(options.out_dir, job.output->command, job.fingerprint, job.items);
 
   WorkQueue queue;
+  FileDigestCache files(options.out_dir / ".batch" / "file_digests.tsv");
+  if (job.input_digest) queue.files = &files;
   std::size_t in_scope = 0;
   BatchResult result;
+  std::optional<ImageKey> first_changed;
   for (std::size_t index = 0; index < job.items.size(); ++index) {
     if (options.shard && !options.shard->contains(index)) continue;
     ++in_scope;
-    if (fs::exists(part_path(options.out_dir, job.items[index], PartKind::kOk))) {
+    const ImageKey& key = job.items[index];
+    const fs::path part = part_path(options.out_dir, key, PartKind::kOk);
+    bool finished = fs::exists(part);
+    if (finished && job.input_digest && read_part_digest(part) != job.input_digest(key, files)) {
+      // Stale: removed now, so that a failure of the recomputation cannot fall back on it.
+      fs::remove(part);
+      finished = false;
+      ++result.changed;
+      if (!first_changed) first_changed = key;
+    }
+    if (finished) {
       ++result.resumed;
     } else {
       queue.todo.push_back(index);
     }
+  }
+  if (job.input_digest) files.save();
+  if (first_changed && !options.quiet) {
+    std::fprintf(stderr,
+                 "%s: finished images recomputed because their inputs changed: %zu (the first: "
+                 "%s)\n",
+                 job.output->command.c_str(), result.changed, describe(*first_changed).c_str());
   }
 
   Progress::Style style = options.quiet ? Progress::Style::kQuiet : Progress::Style::kAuto;
@@ -248,6 +276,7 @@ BatchResult run_batch(const BatchJob& job, const BatchOptions& options) {
 
   result.computed = std::min(queue.next.load(), queue.todo.size());
   result.failed = queue.failed;
+  if (job.input_digest) files.save();
   if (queue.first_error) {
     progress.finish(result.failed);
     std::rethrow_exception(queue.first_error);
@@ -288,6 +317,7 @@ BatchResult merge_batches(const MergeOptions& options) {
     throw UsageError("merge: " + options.inputs[0].string() + " holds results of command '" +
                      command + "', which this clutterscope does not know");
   }
+  claim_output_folder(options.out_dir, command);
   const BatchFolder out = BatchFolder::prepare_like(options.out_dir, inputs[0]);
   std::vector<fs::path> roots = options.inputs;
   const MissingItems missing = out.missing_items(roots);

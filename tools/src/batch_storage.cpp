@@ -19,6 +19,7 @@ namespace {
 
 constexpr int kFormatVersion = 1;
 constexpr std::size_t kMissingExamples = 5;
+constexpr const char* kDigestKey = "digest";
 
 std::string six_digits(int id) {
   char buffer[32];
@@ -155,14 +156,31 @@ fs::path part_path(const fs::path& out_dir, const ImageKey& key, PartKind kind) 
          (six_digits(key.im_id) + (kind == PartKind::kOk ? ".json" : ".failed.json"));
 }
 
-void write_ok_part(const fs::path& out_dir, const ImageKey& key, const ItemOutput& output) {
+void write_ok_part(const fs::path& out_dir, const ImageKey& key, const ItemOutput& output,
+                   std::optional<std::uint64_t> input_digest) {
   const fs::path path = part_path(out_dir, key, PartKind::kOk);
   fs::create_directories(path.parent_path());
-  const nlohmann::json part = {
+  nlohmann::json part = {
       {"tables", output.tables}, {"summary", output.summary}, {"files", output.files}};
+  // "digest" sorts before the other keys, so read_part_digest reads only the file's start.
+  if (input_digest) part[kDigestKey] = hex64(*input_digest);
   write_text_atomically(path, part.dump() + "\n");
   std::error_code ignored;
   fs::remove(part_path(out_dir, key, PartKind::kFailed), ignored);
+}
+
+std::optional<std::uint64_t> read_part_digest(const fs::path& part) {
+  const std::string prefix = std::string("{\"") + kDigestKey + "\":\"";
+  char start[64] = {};
+  std::ifstream file(part, std::ios::binary);
+  file.read(start, static_cast<std::streamsize>(prefix.size() + 17));
+  if (file.gcount() != static_cast<std::streamsize>(prefix.size() + 17) ||
+      std::string(start, prefix.size()) != prefix || start[prefix.size() + 16] != '"') {
+    return std::nullopt;
+  }
+  const std::string hex(start + prefix.size(), 16);
+  if (hex.find_first_not_of("0123456789abcdef") != std::string::npos) return std::nullopt;
+  return std::stoull(hex, nullptr, 16);
 }
 
 void write_failed_part(const fs::path& out_dir, const ImageKey& key, const std::string& message) {

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -18,9 +19,12 @@ enum class PartKind { kOk, kFailed };
 // OUT/.batch/parts/SPLIT/SCENE/IM.json (kOk) or IM.failed.json (kFailed).
 std::filesystem::path part_path(const std::filesystem::path& out_dir, const datasets::ImageKey& key,
                                 PartKind kind);
-// Persists one finished item atomically; an ok part replaces an earlier failed one.
+// Persists one finished item atomically, with the digest of its inputs when the job has one;
+// an ok part replaces an earlier failed one.
 void write_ok_part(const std::filesystem::path& out_dir, const datasets::ImageKey& key,
-                   const ItemOutput& output);
+                   const ItemOutput& output, std::optional<std::uint64_t> input_digest);
+// The input digest stored in an ok part; nullopt when it has none (or cannot be read).
+std::optional<std::uint64_t> read_part_digest(const std::filesystem::path& part);
 void write_failed_part(const std::filesystem::path& out_dir, const datasets::ImageKey& key,
                        const std::string& message);
 
@@ -48,6 +52,7 @@ class BatchFolder {
   static BatchFolder prepare_like(const std::filesystem::path& out_dir, const BatchFolder& source);
 
   void require_same_job(const BatchFolder& other) const;  // throws UsageError
+  const std::filesystem::path& root() const { return root_; }
   std::string command() const { return fingerprint_.at("command").get<std::string>(); }
   const nlohmann::json& fingerprint() const { return fingerprint_; }
 

@@ -15,6 +15,7 @@
 #include "commands.hpp"
 #include "dataset_options.hpp"
 #include "generate_pipeline.hpp"
+#include "output_folder.hpp"
 #include "progress.hpp"
 
 namespace clutterscope::tools {
@@ -34,6 +35,7 @@ struct DetectArguments {
 void run_detect(const DetectArguments& arguments) {
   std::string why;
   if (!arguments.detector.IsValid(&why)) throw UsageError(why);
+  claim_output_file(arguments.out);
   const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
   datasets::DatasetSelection selection;
   selection.splits = {arguments.split};

@@ -21,6 +21,7 @@
 #include "commands.hpp"
 #include "dataset_options.hpp"
 #include "depth_options.hpp"
+#include "input_digest.hpp"
 
 namespace clutterscope::tools {
 
@@ -318,6 +319,7 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
   } else {
     add_depth_check_fingerprint(e.depth, &job.fingerprint);
   }
+  job.input_digest = bop_image_digest(dataset);
   job.make_worker = [&dataset, &arguments]() -> ItemFunction {
     auto worker = std::make_shared<EstimateWorker>(dataset, arguments);
     return [worker](const datasets::ImageKey& key) { return worker->run(key); };

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "output_folder.hpp"
 
 namespace clutterscope::tools {
 
@@ -85,6 +86,7 @@ cv::Mat preview(const render::DepthLabelImage& image) {
 }
 
 void run_render(const RenderArguments& arguments) {
+  claim_output_folder(arguments.out, "render");
   const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
   datasets::DatasetSelection selection;
   selection.splits = {arguments.split};
@@ -111,6 +113,7 @@ void run_render(const RenderArguments& arguments) {
       renderer.render(render::Intrinsics::from_camera(view.camera, center), instances);
 
   const fs::path out = arguments.out;
+  mark_output_folder(out, "render");
   int clipped = 0;
   const cv::Mat depth_mm = depth_to_millimetres(image.depth, &clipped);
   cv::Mat labels;

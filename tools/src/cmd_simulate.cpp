@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "output_folder.hpp"
 
 namespace clutterscope::tools {
 
@@ -368,6 +369,7 @@ void run_simulate(const SimulateArguments& arguments) {
   const std::vector<double> thresholds =
       arguments.compare.empty() ? std::vector<double>{arguments.unloading.variance_threshold_cm2}
                                 : parse_thresholds(arguments.compare);
+  claim_output_folder(arguments.out, "simulate");
 
   const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
   datasets::DatasetSelection selection;
@@ -399,6 +401,7 @@ void run_simulate(const SimulateArguments& arguments) {
                                      "no object to unload: every instance is fixed");
 
   const fs::path out(arguments.out);
+  mark_output_folder(out, "simulate");
   Simulation simulation(arguments, dataset, view, graph);
   std::string compare = kCompareHeader;
   for (double threshold : thresholds) {

@@ -30,6 +30,7 @@
 #include "commands.hpp"
 #include "dataset_options.hpp"
 #include "depth_options.hpp"
+#include "input_digest.hpp"
 
 namespace clutterscope::tools {
 
@@ -476,6 +477,7 @@ void run_visibility(const VisibilityArguments& arguments, int* exit_code) {
   job.fingerprint["write_bop_info"] = arguments.write_bop_info;
   job.fingerprint["masks"] = arguments.masks;
   job.fingerprint["overlays"] = arguments.overlays;
+  job.input_digest = bop_image_digest(dataset);
   job.make_worker = [&dataset, &arguments]() -> ItemFunction {
     auto worker = std::make_shared<VisibilityWorker>(dataset, arguments);
     return [worker](const datasets::ImageKey& key) { return worker->run(key); };

@@ -23,6 +23,7 @@
 #include <utility>
 
 #include "commands.hpp"
+#include "output_folder.hpp"
 
 namespace clutterscope::tools {
 
@@ -380,6 +381,7 @@ nlohmann::json report_fingerprint(const ReportArguments& arguments) {
 }
 
 void prepare_report_folder(const fs::path& dir, const nlohmann::json& fingerprint) {
+  claim_output_folder(dir, "report");
   const fs::path marker = marker_path(dir);
   if (fs::exists(marker)) {
     const nlohmann::json stored = read_json(marker);
@@ -398,11 +400,6 @@ void prepare_report_folder(const fs::path& dir, const nlohmann::json& fingerprin
                      " is " + value_at(stored) + " there, " + value_at(fingerprint) +
                      " now); its results are not mixed with this run's: choose another --out or "
                      "delete that folder");
-  }
-  if (fs::exists(dir) && !(fs::is_directory(dir) && fs::is_empty(dir))) {
-    throw UsageError(dir.string() +
-                     " exists and is not a clutterscope report folder (no .report/job.json); "
-                     "choose a new or empty --out folder");
   }
   fs::create_directories(marker.parent_path());
   datasets::write_file_atomically(marker, fingerprint.dump(2) + "\n");
@@ -423,6 +420,9 @@ ReportRun run_report(const ReportArguments& arguments) {
   const std::vector<std::string> steps = {"estimate", "visibility"};
   for (const std::string& step : steps) parse_step(step_command_line(arguments, step), true);
   prepare_report_folder(dir, report_fingerprint(arguments));
+  // The steps write DIR/visibility, DIR/estimate and DIR/beliefs/..., which belong to the
+  // report: only its own steps may write there.
+  const DelegatedOutput steps_write_inside(dir);
 
   ReportRun run;
   for (const std::string& step : steps) {

@@ -65,8 +65,9 @@ std::vector<std::string> step_command_line(const ReportArguments& arguments,
 nlohmann::json report_fingerprint(const ReportArguments& arguments);
 
 // Creates DIR/.report/job.json, or checks that DIR holds a report of the same job. Throws
-// UsageError when it holds another job (naming the first difference) or when DIR is a
-// non-empty folder that is not a report folder.
+// UsageError when it holds another job (naming the first difference) or when DIR may not be
+// the report's (claim_output_folder: another command's results, a non-empty folder that is
+// not a report folder).
 void prepare_report_folder(const std::filesystem::path& dir, const nlohmann::json& fingerprint);
 
 // Runs the whole report. Throws UsageError (bad options, folder of another job), CLI11 parse

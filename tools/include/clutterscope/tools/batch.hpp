@@ -18,7 +18,13 @@
 //   .batch/job.json              fingerprint of the job; a different job into OUT is refused
 //   .batch/items.tsv             the job's full item list (split, scene, image), all shards
 //   .batch/shard-I-of-N.json     written when shard I of N finished its items
-//   .batch/parts/SPLIT/SCENE/IM.json  one finished item (tables rows, summary, or error)
+//   .batch/parts/SPLIT/SCENE/IM.json  one finished item (tables rows, summary, or error) and
+//                                the digest of its inputs (BatchJob::input_digest)
+//   .batch/file_digests.tsv      content hashes of the input files by size and time
+//
+// Resume: a finished item is kept only when the digest of its inputs is still the one stored
+// with it; an item whose inputs changed (an edited scene_gt.json, a new depth image) is
+// recomputed, so a resume never mixes stale results into the tables.
 //
 // Sharding: item k of the sorted job list belongs to shard k mod N (round robin, so every
 // shard gets a similar mix of scenes). A shard run writes parts and its shard manifest but
@@ -38,6 +44,8 @@
 #include <vector>
 
 namespace clutterscope::tools {
+
+class FileDigestCache;  // input_digest.hpp
 
 // A command-line or job-setup mistake by the user (bad --shard, an --out folder holding a
 // different job, ...). The CLI maps it to exit code 2.
@@ -149,12 +157,17 @@ struct BatchJob {
   // command, the tool version and a hash of the item list. Key order is irrelevant.
   nlohmann::json fingerprint = nlohmann::json::object();
   WorkerFactory make_worker;
+  // The digest of everything item `key`'s results depend on (file contents, dataset entries),
+  // e.g. bop_image_digest(dataset). Thread-safe. Stored with each finished item; a resume
+  // recomputes the items whose digest changed. Empty: finished items are always kept.
+  std::function<std::uint64_t(const datasets::ImageKey&, FileDigestCache&)> input_digest;
 };
 
 struct BatchResult {
   bool complete = false;          // final files written (false for a shard run)
   std::size_t computed = 0;       // items processed by this run
   std::size_t resumed = 0;        // items found finished from an earlier run
+  std::size_t changed = 0;        // finished items recomputed because their inputs changed
   std::size_t failed = 0;         // failed items in the whole job (or this shard)
   double seconds = 0.0;           // wall time of this run
   double seconds_per_item = 0.0;  // mean time of the per-item function, over computed items
