@@ -134,6 +134,8 @@ nlohmann::ordered_json run_record(const ReportArguments& arguments, const fs::pa
     failures[step] = summary.at("counts").at("failures");
   }
   run["failed_images"] = failures;
+  // The checks on the GT both steps read (rotations off orthonormal), as visibility counted.
+  run["input_checks"] = read_json(dir / "visibility" / "summary.json").at("input_checks");
   const report::ReportOptions& analysis = arguments.analysis;
   run["analysis"] = {{"accurate_cm", analysis.accurate_cm},
                      {"variance_threshold_cm2", analysis.variance_threshold_cm2},
