@@ -202,7 +202,9 @@ bool BopOpenOptions::IsValid(std::string* why) const {
     if (value.find_first_of("/\\") == std::string::npos && value != "." && value != "..") {
       return true;
     }
-    if (why) *why = std::string(name) + " must be a folder name inside the dataset, got \"" + value + "\"";
+    if (why) {
+      *why = std::string(name) + " must be a folder name inside the dataset, got \"" + value + "\"";
+    }
     return false;
   };
   if (!folder_name("models_dir", models_dir) || !folder_name("camera_type", camera_type)) {
@@ -335,7 +337,8 @@ BopDataset BopDataset::open(const fs::path& root, const BopOpenOptions& options)
 const ModelInfo& BopDataset::model(int obj_id) const {
   const auto found = model_index_.find(obj_id);
   if (found == model_index_.end()) {
-    throw DatasetError(models_info_path_, "obj_id " + std::to_string(obj_id) + " is not in models_info.json");
+    throw DatasetError(models_info_path_,
+                       "obj_id " + std::to_string(obj_id) + " is not in models_info.json");
   }
   return models_[found->second];
 }
@@ -428,7 +431,9 @@ void BopDataset::attach_targets(TestTargets targets, std::filesystem::path targe
 
 void BopDataset::check_targets_exist(const std::vector<std::string>& split_names) const {
   std::map<int, std::set<int>> images_by_scene;
-  for (const auto& entry : targets_->images) images_by_scene[entry.first.first].insert(entry.first.second);
+  for (const auto& entry : targets_->images) {
+    images_by_scene[entry.first.first].insert(entry.first.second);
+  }
   for (const auto& [scene_id, im_ids] : images_by_scene) {
     std::set<int> present;
     bool scene_found = false;
@@ -613,8 +618,8 @@ SceneView BopDataset::load(const ImageKey& key) const {
 std::vector<int> BopDataset::target_instances(const SceneView& view) const {
   const auto found = targets_->images.find({view.key.scene_id, view.key.im_id});
   if (found == targets_->images.end()) {
-    throw DatasetError(targets_file_, location(view.key.scene_id, view.key.im_id) +
-                                          "image is not a test target");
+    throw DatasetError(targets_file_,
+                       location(view.key.scene_id, view.key.im_id) + "image is not a test target");
   }
   std::vector<int> instances;
   for (const auto& [obj_id, inst_count] : found->second) {

@@ -118,9 +118,9 @@ TEST_F(BopFormatCli, LmoRoundedRotationsAreAcceptedAndCounted) {
       read_text(dir_.path() / "out" / "bop" / "test" / "000001" / "scene_gt_info.json"));
   EXPECT_EQ(info.size(), 6u);
   // The same counts come out for --jobs 2 (summary.json built from the per-image results).
-  const CommandRun parallel = run_merged("visibility " + quoted(root) + " -q --jobs 2 --mode " +
-                                         "bop19 --write-bop-info --out " +
-                                         quoted(dir_.path() / "out2"));
+  const CommandRun parallel =
+      run_merged("visibility " + quoted(root) + " -q --jobs 2 --mode " +
+                 "bop19 --write-bop-info --out " + quoted(dir_.path() / "out2"));
   ASSERT_EQ(parallel.exit_code, 0) << parallel.output;
   EXPECT_EQ(summary().at("input_checks"), summary("out2").at("input_checks"));
   EXPECT_EQ(read_text(dir_.path() / "out" / "bop" / "test" / "000001" / "scene_gt_info.json"),
@@ -235,6 +235,30 @@ TEST_F(BopFormatCli, Bop24TargetsSelectExactlyTheListedImages) {
   EXPECT_EQ(images[0].rfind("test,1,1,3,", 0), 0u) << images[0];
   EXPECT_EQ(images[1].rfind("test,2,0,3,", 0), 0u) << images[1];
   EXPECT_EQ(rows(dir_.path() / "out" / "objects.csv").size(), 6u);
+}
+
+TEST_F(BopFormatCli, EstimateCountsRoundedRotationsAndReportsOnlyTargets) {
+  const fs::path root = write_tiny_bop_dataset(dir_.path() / "dataset");
+  // Image 0's cube, Rz(10°), rounded to two decimals: |R^T R - I| = 0.0107.
+  const fs::path gt_path = root / "test" / "000001" / "scene_gt.json";
+  std::string gt = read_text(gt_path);
+  const std::string cube =
+      "\"cam_R_m2c\": " + testing::json_row_major(testing::tiny_bop_image(1, 0).gt[1].R);
+  ASSERT_NE(gt.find(cube), std::string::npos);
+  gt.replace(gt.find(cube), cube.size(), "\"cam_R_m2c\": [0.98, -0.17, 0, 0.17, 0.98, 0, 0, 0, 1]");
+  write_text(gt_path, gt);
+  const fs::path targets = root / "test_targets_bop19.json";
+  write_text(targets, "[{\"im_id\": 0, \"inst_count\": 1, \"obj_id\": 2, \"scene_id\": 1}]");
+  const CommandRun run = run_merged(
+      "estimate " + quoted(root) + " --out " + quoted(dir_.path() / "out") + " --targets " +
+      quoted(targets) + " --jobs 1 --no-time --particles 30 --iterations 3 --icp-samples 5 -q");
+  ASSERT_LE(run.exit_code, 1) << run.output;
+  const std::vector<std::string> estimates = rows(dir_.path() / "out" / "estimates.csv");
+  ASSERT_EQ(estimates.size(), 1u);
+  EXPECT_EQ(estimates[0].rfind("test,1,0,1,2,", 0), 0u) << estimates[0];
+  const nlohmann::json checks = summary().at("input_checks");
+  EXPECT_EQ(checks.at("rotations_off_orthonormal_1e-6"), 1);
+  EXPECT_NEAR(checks.at("max_rotation_orthonormality_error").get<double>(), 0.0107, 1e-12);
 }
 
 TEST_F(BopFormatCli, TargetsNamingAnImageNotInTheDatasetAreBadInput) {

@@ -100,7 +100,9 @@ TEST_F(BopFormat, RotationFiveHundredthsOffIsRefusedNamingTheValue) {
   // R^T R - I has 0.05 off the diagonal (and 0.0025 on it).
   replace_first(scene_file("scene_gt.json"), cube_rotation(),
                 "\"cam_R_m2c\": [1, 0.05, 0, 0, 1, 0, 0, 0, 1]");
-  expect_mentions(dataset_error([&] { BopDataset::open(dir_.path()).load({"test", 1, 0}); }),
+  expect_mentions(dataset_error([&] {
+                    BopDataset::open(dir_.path()).load({"test", 1, 0});
+                  }),
                   {"scene_gt.json", "scene 1, image 0, gt 1: cam_R_m2c is not a rotation",
                    "|R^T R - I| = 0.05 exceeds 0.02"});
 }
@@ -170,7 +172,8 @@ TEST(BopSplits, TrainRealTrainPbrAndValAreSplits) {
   selection.splits = {"val"};
   EXPECT_EQ(dataset.list_images(selection).front(), (ImageKey{"val", 5, 0}));
   selection.splits = {"train_real"};
-  EXPECT_EQ(dataset.load(dataset.list_images(selection).back()).key, (ImageKey{"train_real", 0, 1}));
+  EXPECT_EQ(dataset.load(dataset.list_images(selection).back()).key,
+            (ImageKey{"train_real", 0, 1}));
 }
 
 TEST(BopSplits, SplitTypeReadsItsCameraFile) {
@@ -287,8 +290,7 @@ class BopTargets : public ::testing::Test {
 TEST_F(BopTargets, Bop24SelectsExactlyTheListedImages) {
   const BopDataset dataset =
       with_targets("[{\"im_id\": 1, \"scene_id\": 1}, {\"im_id\": 0, \"scene_id\": 2}]");
-  EXPECT_EQ(dataset.list_images({}),
-            (std::vector<ImageKey>{{"test", 1, 1}, {"test", 2, 0}}));
+  EXPECT_EQ(dataset.list_images({}), (std::vector<ImageKey>{{"test", 1, 1}, {"test", 2, 0}}));
   // Every instance of a bop24 target image is a target.
   EXPECT_FALSE(dataset.load({"test", 1, 1}).target_gt.has_value());
   // The selection still filters.
@@ -313,7 +315,9 @@ TEST_F(BopTargets, Bop19SelectsTheListedObjectsInstances) {
 TEST_F(BopTargets, InstCountAboveTheGtIsRefused) {
   const BopDataset dataset =
       with_targets("[{\"im_id\": 0, \"inst_count\": 2, \"obj_id\": 3, \"scene_id\": 1}]");
-  expect_mentions(dataset_error([&] { dataset.load({"test", 1, 0}); }),
+  expect_mentions(dataset_error([&] {
+                    dataset.load({"test", 1, 0});
+                  }),
                   {"test_targets_bop19.json", "scene 1, image 0",
                    "target obj_id 3 has inst_count 2 but scene_gt.json has 1 instance"});
 }
@@ -321,16 +325,18 @@ TEST_F(BopTargets, InstCountAboveTheGtIsRefused) {
 TEST_F(BopTargets, ObjectNotInTheImageIsRefused) {
   const BopDataset dataset =
       with_targets("[{\"im_id\": 0, \"inst_count\": 1, \"obj_id\": 9, \"scene_id\": 1}]");
-  expect_mentions(dataset_error([&] { dataset.load({"test", 1, 0}); }),
+  expect_mentions(dataset_error([&] {
+                    dataset.load({"test", 1, 0});
+                  }),
                   {"target obj_id 9 has inst_count 1 but scene_gt.json has 0 instance"});
 }
 
 TEST_F(BopTargets, ImageNotInTheDatasetIsRefused) {
   const BopDataset dataset =
       with_targets("[{\"im_id\": 0, \"scene_id\": 1}, {\"im_id\": 7, \"scene_id\": 2}]");
-  expect_mentions(dataset_error([&] { dataset.list_images({}); }),
-                  {"test_targets_bop19.json", "scene 2, image 7",
-                   "target image is not in the dataset"});
+  expect_mentions(
+      dataset_error([&] { dataset.list_images({}); }),
+      {"test_targets_bop19.json", "scene 2, image 7", "target image is not in the dataset"});
 }
 
 TEST_F(BopTargets, SceneNotInTheDatasetIsRefused) {

@@ -80,8 +80,8 @@ class EstimateWorker {
     nlohmann::json objects = nlohmann::json::array();
     for (const ObjectEstimate& object : result.objects) {
       // bop19 targets: every instance takes part in the scene, only targets are reported.
-      if (view.target_gt && !std::binary_search(view.target_gt->begin(), view.target_gt->end(),
-                                                object.gt_id)) {
+      if (view.target_gt &&
+          !std::binary_search(view.target_gt->begin(), view.target_gt->end(), object.gt_id)) {
         continue;
       }
       const bool ok = object.failure.empty();

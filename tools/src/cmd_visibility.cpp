@@ -113,8 +113,7 @@ BopGtInfo info_from_json(const nlohmann::json& json) {
 
 // Whether GT instance `gt` of the view is a test target (all are without bop19 targets).
 bool is_target(const datasets::SceneView& view, int gt) {
-  return !view.target_gt ||
-         std::binary_search(view.target_gt->begin(), view.target_gt->end(), gt);
+  return !view.target_gt || std::binary_search(view.target_gt->begin(), view.target_gt->end(), gt);
 }
 
 // One worker thread: its own EGL context, renderer and uploaded meshes.

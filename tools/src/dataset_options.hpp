@@ -1,8 +1,9 @@
 #pragma once
 
 // The options every per-image batch command shares: DATASET, --split, --split-type,
-// --models-dir, --targets, --scenes, --images, --out, --jobs, --shard, --keep-going, --quiet. Malformed values are CLI11 validation errors
-// (exit 2) raised while parsing, with a message naming the option.
+// --models-dir, --targets, --scenes, --images, --out, --jobs, --shard, --keep-going, --quiet.
+// Malformed values are CLI11 validation errors (exit 2) raised while parsing, with a message naming
+// the option.
 
 #include <CLI/CLI.hpp>
 #include <clutterscope/datasets/bop.hpp>
@@ -68,8 +69,8 @@ BatchOptions batch_options_of(const DatasetOptions& options, const std::string& 
 
 // The fingerprint entries every dataset command shares: absolute dataset path, split, and the
 // canonical scene and image id lists (format_id_list); split_type, models_dir and the absolute
-// targets path only where given (so fingerprints of runs without them are unchanged). Commands add their own result-changing
-// options to it.
+// targets path only where given (so fingerprints of runs without them are unchanged). Commands add
+// their own result-changing options to it.
 nlohmann::json dataset_fingerprint(const DatasetOptions& options);
 
 }  // namespace clutterscope::tools
