@@ -6,6 +6,7 @@
 
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/graph_inference.hpp>
 #include <functional>
 
 #include "datasets/bop_fixture_support.hpp"
@@ -114,6 +115,25 @@ TEST_F(BopFormat, WorldRotationRoundedLikeLmoIsAccepted) {
   const SceneView view = BopDataset::open(dir_.path()).load({"test", 1, 0});
   ASSERT_TRUE(view.camera.world_to_camera.has_value());
   EXPECT_EQ(view.camera.world_to_camera->linear()(0, 1), -0.17);
+}
+
+TEST(BopRotation, GravityFrameOfARoundedSupportIsRigid) {
+  // A support frame is inverted by transpose: a rounded one is replaced by the nearest
+  // rotation, here Rz(atan2(0.17, 0.98)) (the polar factor of a scaled rotation).
+  SceneView view;
+  GtInstance tray;
+  tray.model_to_camera.linear() << 0.98, -0.17, 0, 0.17, 0.98, 0, 0, 0, 1;
+  tray.model_to_camera.translation() = Eigen::Vector3d(0, 0, 0.8);
+  view.objects = {tray};
+  const Eigen::Isometry3d frame = gravity_frame(view, {0});
+  const Eigen::Matrix3d expected =
+      Eigen::AngleAxisd(std::atan2(0.17, 0.98), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  EXPECT_LT((frame.linear() - expected).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_EQ(frame.translation(), tray.model_to_camera.translation());
+  // Within 1e-6 of orthonormal the stored rotation is returned bit for bit.
+  view.objects[0].model_to_camera.linear() =
+      Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  EXPECT_EQ(gravity_frame(view, {0}).linear(), view.objects[0].model_to_camera.linear());
 }
 
 TEST(BopRotation, OrthonormalityErrorOfScaledMatrix) {
