@@ -6,6 +6,14 @@
 #include <fstream>
 #include <sstream>
 
+namespace clutterscope::datasets {
+
+double rotation_orthonormality_error(const Eigen::Matrix3d& rotation) {
+  return (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+}
+
+}  // namespace clutterscope::datasets
+
 namespace clutterscope::datasets::detail {
 
 namespace fs = std::filesystem;
@@ -182,16 +190,17 @@ Eigen::Matrix3d row_major_matrix(const Json& value, const char* field,
 Eigen::Matrix3d rotation(const Json& value, const char* field, const FieldContext& context,
                          double tolerance) {
   const Eigen::Matrix3d matrix = row_major_matrix(value, field, context);
-  const double orthonormality_error =
-      (matrix.transpose() * matrix - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  const double orthonormality_error = rotation_orthonormality_error(matrix);
   if (orthonormality_error > tolerance) {
     std::ostringstream message;
     message << field << " is not a rotation: |R^T R - I| = " << orthonormality_error << " exceeds "
             << tolerance;
     context.fail(message.str());
   }
+  // Within the tolerance det(R)^2 = det(R^T R) is within about 3 tolerance of 1, so this
+  // refuses reflections (det = -1) and nothing the orthonormality check accepted otherwise.
   const double determinant = matrix.determinant();
-  if (std::abs(determinant - 1.0) > tolerance) {
+  if (std::abs(determinant - 1.0) > 3 * tolerance) {
     std::ostringstream message;
     message << field << " is not a rotation: det(R) = " << determinant << ", expected +1";
     context.fail(message.str());

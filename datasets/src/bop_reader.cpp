@@ -199,6 +199,22 @@ bool BopOpenOptions::IsValid(std::string* why) const {
     if (why) *why = "scene_cache_capacity must be >= 1, got 0";
     return false;
   }
+  const auto folder_name = [why](const char* name, const std::string& value) {
+    if (value.find_first_of("/\\") == std::string::npos && value != "." && value != "..") {
+      return true;
+    }
+    if (why) {
+      *why = std::string(name) + " must be a folder name inside the dataset, got \"" + value + "\"";
+    }
+    return false;
+  };
+  if (!folder_name("models_dir", models_dir) || !folder_name("camera_type", camera_type)) {
+    return false;
+  }
+  if (models_dir.empty()) {
+    if (why) *why = "models_dir must not be empty";
+    return false;
+  }
   return true;
 }
 
@@ -241,8 +257,9 @@ BopDataset BopDataset::open(const fs::path& root, const BopOpenOptions& options)
   BopDataset dataset;
   dataset.root_ = root;
   dataset.cache_ = std::make_unique<SceneCache>(options.scene_cache_capacity);
+  dataset.models_info_path_ = root / options.models_dir / "models_info.json";
 
-  const fs::path models_dir = root / "models";
+  const fs::path models_dir = root / options.models_dir;
   const fs::path info_path = models_dir / "models_info.json";
   const Json info = detail::read_json_file(info_path, "", "obj_id");
   require_object(info, info_path, "", "obj_id");
@@ -298,7 +315,11 @@ BopDataset BopDataset::open(const fs::path& root, const BopOpenOptions& options)
     }
   }
 
-  const fs::path camera_path = root / "camera.json";
+  fs::path camera_path = root / "camera.json";
+  if (!options.camera_type.empty() &&
+      fs::exists(root / ("camera_" + options.camera_type + ".json"), error)) {
+    camera_path = root / ("camera_" + options.camera_type + ".json");
+  }
   if (fs::exists(camera_path, error)) {
     const Json camera = detail::read_json_file(camera_path, "", "field");
     const FieldContext context{camera_path, ""};
@@ -323,7 +344,7 @@ BopDataset BopDataset::open(const fs::path& root, const BopOpenOptions& options)
 const ModelInfo& BopDataset::model(int obj_id) const {
   const auto found = model_index_.find(obj_id);
   if (found == model_index_.end()) {
-    throw DatasetError(root_ / "models" / "models_info.json",
+    throw DatasetError(models_info_path_,
                        "obj_id " + std::to_string(obj_id) + " is not in models_info.json");
   }
   return models_[found->second];
@@ -374,6 +395,7 @@ std::vector<ImageKey> BopDataset::list_images(const DatasetSelection& selection)
   fs::path last_camera_path;
   int scenes_visited = 0;
 
+  if (targets_) check_targets_exist(split_names);
   std::vector<ImageKey> keys;
   for (const auto& split : split_names) {
     for (const int scene_id : scene_ids(split)) {
@@ -387,6 +409,7 @@ std::vector<ImageKey> BopDataset::list_images(const DatasetSelection& selection)
       for (const int im_id : sorted_ids(camera, last_camera_path, where, "image")) {
         if (!wanted_images.empty() && wanted_images.count(im_id) == 0) continue;
         found_images.insert(im_id);
+        if (targets_ && targets_->images.count({scene_id, im_id}) == 0) continue;
         keys.push_back(ImageKey{split, scene_id, im_id});
       }
     }
@@ -406,6 +429,47 @@ std::vector<ImageKey> BopDataset::list_images(const DatasetSelection& selection)
     }
   }
   return keys;
+}
+
+void BopDataset::attach_targets(TestTargets targets, std::filesystem::path targets_file) {
+  targets_ = std::move(targets);
+  targets_file_ = std::move(targets_file);
+}
+
+void BopDataset::check_targets_exist(const std::vector<std::string>& split_names) const {
+  std::map<int, std::set<int>> images_by_scene;
+  for (const auto& entry : targets_->images) {
+    images_by_scene[entry.first.first].insert(entry.first.second);
+  }
+  for (const auto& [scene_id, im_ids] : images_by_scene) {
+    std::set<int> present;
+    bool scene_found = false;
+    for (const auto& split : split_names) {
+      const fs::path dir = root_ / split / six_digits(scene_id);
+      std::error_code error;
+      if (!fs::is_directory(dir, error)) continue;
+      scene_found = true;
+      const fs::path camera_path = dir / "scene_camera.json";
+      const Json camera = detail::read_json_file(camera_path, location(scene_id), "image");
+      require_object(camera, camera_path, location(scene_id), "image id");
+      for (const int im_id : sorted_ids(camera, camera_path, location(scene_id), "image")) {
+        present.insert(im_id);
+      }
+    }
+    if (!scene_found) {
+      throw DatasetError(targets_file_, "target scene " + std::to_string(scene_id) +
+                                            " is not in the dataset (split " + join(split_names) +
+                                            " of " + root_.string() + ")");
+    }
+    for (const int im_id : im_ids) {
+      if (present.count(im_id) == 0) {
+        throw DatasetError(targets_file_, location(scene_id, im_id) +
+                                              "target image is not in the dataset (not in "
+                                              "scene_camera.json of split " +
+                                              join(split_names) + ")");
+      }
+    }
+  }
 }
 
 std::shared_ptr<const BopDataset::SceneFiles> BopDataset::scene(const std::string& split,
@@ -554,9 +618,37 @@ SceneView BopDataset::load(const ImageKey& key) const {
   view.graph = record.graph;
   const auto detections = detections_.find({key.scene_id, key.im_id});
   if (detections != detections_.end()) view.detections = detections->second;
+  if (targets_ && targets_->per_object) view.target_gt = target_instances(view);
   view.depth_path = depth_file(files->dir, key.im_id);
   view.rgb_path = rgb_file(files->dir, key.im_id);
   return view;
+}
+
+std::vector<int> BopDataset::target_instances(const SceneView& view) const {
+  const auto found = targets_->images.find({view.key.scene_id, view.key.im_id});
+  if (found == targets_->images.end()) {
+    throw DatasetError(targets_file_,
+                       location(view.key.scene_id, view.key.im_id) + "image is not a test target");
+  }
+  std::vector<int> instances;
+  for (const auto& [obj_id, inst_count] : found->second) {
+    int count = 0;
+    for (std::size_t gt = 0; gt < view.objects.size(); ++gt) {
+      if (view.objects[gt].obj_id != obj_id) continue;
+      instances.push_back(static_cast<int>(gt));
+      ++count;
+    }
+    // BOP counts the instances at least 10% visible: scene_gt.json may hold more, never fewer.
+    if (count < inst_count) {
+      throw DatasetError(targets_file_, location(view.key.scene_id, view.key.im_id) +
+                                            "target obj_id " + std::to_string(obj_id) +
+                                            " has inst_count " + std::to_string(inst_count) +
+                                            " but scene_gt.json has " + std::to_string(count) +
+                                            " instance(s) of it");
+    }
+  }
+  std::sort(instances.begin(), instances.end());
+  return instances;
 }
 
 void BopDataset::attach_detections(const fs::path& detections_json) {

@@ -1,4 +1,6 @@
+#include <Eigen/SVD>
 #include <algorithm>
+#include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/graph_inference.hpp>
 #include <cmath>
@@ -81,6 +83,23 @@ std::string to_string(GravitySource source) {
   return "unknown";
 }
 
+namespace {
+
+// A frame is rigid: callers invert it as an isometry (by transpose). BOP rotations are stored
+// up to kRotationOrthonormalityTolerance from orthonormal, so one further than
+// kRotationReportThreshold is replaced by the nearest rotation (polar decomposition); closer
+// ones are used as stored, which keeps results on clean data bit-identical.
+Eigen::Isometry3d rigid(Eigen::Isometry3d frame) {
+  if (rotation_orthonormality_error(frame.linear()) > kRotationReportThreshold) {
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(frame.linear(),
+                                                Eigen::ComputeFullU | Eigen::ComputeFullV);
+    frame.linear() = svd.matrixU() * svd.matrixV().transpose();
+  }
+  return frame;
+}
+
+}  // namespace
+
 Eigen::Isometry3d gravity_frame(const SceneView& view, const std::vector<int>& fixed,
                                 GravitySource* source) {
   const auto report = [&](GravitySource s) {
@@ -88,11 +107,11 @@ Eigen::Isometry3d gravity_frame(const SceneView& view, const std::vector<int>& f
   };
   if (view.camera.world_to_camera) {
     report(GravitySource::kCameraWorldPose);
-    return *view.camera.world_to_camera;
+    return rigid(*view.camera.world_to_camera);
   }
   if (!fixed.empty()) {
     report(GravitySource::kFixedSupport);
-    return view.objects.at(static_cast<std::size_t>(fixed.front())).model_to_camera;
+    return rigid(view.objects.at(static_cast<std::size_t>(fixed.front())).model_to_camera);
   }
   report(GravitySource::kUprightCamera);
   // World x = camera x, world z (up) = camera -y, world y = z cross x = camera z.

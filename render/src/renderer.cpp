@@ -742,7 +742,10 @@ TileAtlas Renderer::render_tiles(const std::vector<TileRequest>& requests,
       std::vector<Eigen::Vector4d> cameras;  // camera centre in the model frame, margin
       for (std::size_t j = 0; j < run.count; ++j) {
         const Eigen::Isometry3d& pose = requests[first + j].instance.model_to_camera;
-        const Eigen::Vector3d centre = -(pose.linear().transpose() * pose.translation());
+        // The inverse, not the transpose: BOP rotations are used as stored, up to 2e-2 from
+        // orthonormal, and a transpose would misplace the camera by that fraction of its
+        // distance and cull faces it sees.
+        const Eigen::Vector3d centre = -(pose.linear().inverse() * pose.translation());
         cameras.emplace_back(centre.x(), centre.y(), centre.z(), 1e-3 * centre.norm());
       }
       run.first_index = state.kept_indices.size();

@@ -77,6 +77,56 @@ TEST(DatasetOptions, DefaultsAndValues) {
   EXPECT_EQ(fingerprint["split"], "val");
 }
 
+TEST(DatasetOptions, BopLayoutOptions) {
+  const fs::path dataset = testing::fresh_dir("options_layout");
+  DatasetOptions options;
+  parse({dataset.string(), "--out", "o"}, &options);
+  EXPECT_EQ(options.models_dir, "models");
+  EXPECT_EQ(split_folder(options), "test");
+  // Runs without the options keep their fingerprint.
+  const nlohmann::json plain = dataset_fingerprint(options);
+  EXPECT_FALSE(plain.contains("split_type"));
+  EXPECT_FALSE(plain.contains("models_dir"));
+  EXPECT_FALSE(plain.contains("targets"));
+
+  parse({dataset.string(), "--out", "o", "--split-type", "primesense", "--models-dir",
+         "models_eval", "--targets", "t.json"},
+        &options);
+  EXPECT_EQ(selection_of(options).splits, std::vector<std::string>{"test_primesense"});
+  const nlohmann::json fingerprint = dataset_fingerprint(options);
+  EXPECT_EQ(fingerprint["split"], "test");
+  EXPECT_EQ(fingerprint["split_type"], "primesense");
+  EXPECT_EQ(fingerprint["models_dir"], "models_eval");
+  EXPECT_TRUE(fs::path(fingerprint["targets"].get<std::string>()).is_absolute());
+
+  options.models_dir = "../elsewhere";
+  EXPECT_THROW(open_dataset(options), UsageError);
+}
+
+TEST(DatasetOptions, InputCheckTotalsDoNotDependOnOrder) {
+  const std::vector<nlohmann::json> images = {
+      {{"rotations_off", 2}, {"max_rotation_error", 0.0131}},
+      {{"rotations_off", 0}, {"max_rotation_error", 2e-16}},
+      {{"rotations_off", 1}, {"max_rotation_error", 0.004}}};
+  InputCheckTotals forward, backward;
+  for (const auto& image : images) forward.add(image);
+  for (auto it = images.rbegin(); it != images.rend(); ++it) backward.add(*it);
+  EXPECT_EQ(forward.to_json().dump(), backward.to_json().dump());
+  EXPECT_EQ(forward.to_json()["rotations_off_orthonormal_1e-6"], 3);
+  EXPECT_EQ(forward.to_json()["max_rotation_orthonormality_error"], 0.0131);
+}
+
+TEST(DatasetOptions, InputChecksOfAViewCountRotationsOffOrthonormal) {
+  datasets::SceneView view;
+  view.objects.resize(3);
+  view.objects[1].model_to_camera.linear() << 0.98, -0.17, 0, 0.17, 0.98, 0, 0, 0, 1;
+  view.objects[2].model_to_camera.linear() =
+      Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const nlohmann::json checks = input_checks_of(view);
+  EXPECT_EQ(checks["rotations_off"], 1);
+  EXPECT_NEAR(checks["max_rotation_error"].get<double>(), 1 - (0.98 * 0.98 + 0.17 * 0.17), 1e-15);
+}
+
 TEST(DatasetOptions, BadValuesAreUsageErrorsWhileParsing) {
   const std::string dataset = testing::fresh_dir("options_bad").string();
   const std::vector<std::vector<std::string>> bad = {

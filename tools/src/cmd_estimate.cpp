@@ -81,6 +81,11 @@ class EstimateWorker {
     std::string rows, bop_rows, beliefs;
     nlohmann::json objects = nlohmann::json::array();
     for (const ObjectEstimate& object : result.objects) {
+      // bop19 targets: every instance takes part in the scene, only targets are reported.
+      if (view.target_gt &&
+          !std::binary_search(view.target_gt->begin(), view.target_gt->end(), object.gt_id)) {
+        continue;
+      }
       const bool ok = object.failure.empty();
       CsvRow row;
       row.add(key.split).add(key.scene_id).add(key.im_id).add(object.gt_id).add(object.obj_id);
@@ -146,7 +151,8 @@ class EstimateWorker {
                       {"graph_inferred", result.graph_inferred},
                       {"gravity_source", result.gravity_source},
                       {"observation", result.observation},
-                      {"detections", result.detections}};
+                      {"detections", result.detections},
+                      {"input_checks", input_checks_of(view)}};
     if (arguments_.save_beliefs) {
       const fs::path relative = fs::path("beliefs") / key.split / six_digits(key.scene_id) /
                                 (six_digits(key.im_id) + ".csv");
@@ -181,6 +187,7 @@ class EstimateSummary : public SummaryBuilder {
     if (record.summary.at("graph_inferred").get<bool>()) ++graphs_inferred_;
     if (record.summary.at("observation") == "synthetic") ++synthetic_observations_;
     if (record.summary.at("detections") == "synthetic") ++synthetic_detections_;
+    input_checks_.add(record.summary.at("input_checks"));
     for (const auto& message : record.summary.at("image_failures")) {
       image_failures_.push_back({{"split", record.key.split},
                                  {"scene_id", record.key.scene_id},
@@ -260,6 +267,7 @@ class EstimateSummary : public SummaryBuilder {
     summary["accuracy"] = accuracy;
     summary["object_failures"] = object_failures_;
     summary["image_failures"] = image_failures_;
+    summary["input_checks"] = input_checks_.to_json();
     summary["timing"] =
         "per-run wall time is in run.json; time_ms in estimates.csv and time in results_bop.csv "
         "are measured (empty / -1 with --no-time, which makes every output byte-reproducible)";
@@ -268,6 +276,7 @@ class EstimateSummary : public SummaryBuilder {
 
  private:
   nlohmann::json fingerprint_;
+  InputCheckTotals input_checks_;
   long images_ = 0, graphs_inferred_ = 0, objects_ = 0, estimated_ = 0;
   long synthetic_observations_ = 0, synthetic_detections_ = 0;
   long confident_over_2cm_ = 0, high_visibility_ = 0, high_visibility_confident_ = 0;
@@ -289,7 +298,7 @@ BatchOutputSpec estimate_output_spec() {
 void run_estimate(const EstimateArguments& arguments, int* exit_code) {
   std::string why;
   if (!arguments.estimate.IsValid(&why)) throw UsageError(why);
-  datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset.dataset);
+  datasets::BopDataset dataset = open_dataset(arguments.dataset);
   if (!arguments.detections.empty()) dataset.attach_detections(arguments.detections);
   const EstimateOptions& e = arguments.estimate;
   BatchJob job;

@@ -114,6 +114,11 @@ BopGtInfo info_from_json(const nlohmann::json& json) {
   return info;
 }
 
+// Whether GT instance `gt` of the view is a test target (all are without bop19 targets).
+bool is_target(const datasets::SceneView& view, int gt) {
+  return !view.target_gt || std::binary_search(view.target_gt->begin(), view.target_gt->end(), gt);
+}
+
 // One worker thread: its own EGL context, renderer and uploaded meshes.
 class VisibilityWorker {
  public:
@@ -193,6 +198,9 @@ class VisibilityWorker {
     nlohmann::json objects = nlohmann::json::array();
     for (std::size_t gt = 0; gt < result.objects.size(); ++gt) {
       const BopGtInfo& info = result.objects[gt].info;
+      objects.push_back(info_json(info));
+      // Every instance occludes and goes to scene_gt_info.json; rows are for targets only.
+      if (!is_target(view, static_cast<int>(gt))) continue;
       CsvRow row;
       row.add(key.split).add(key.scene_id).add(key.im_id).add(static_cast<int>(gt));
       row.add(view.objects[gt].obj_id).add(labels[gt]);
@@ -203,7 +211,6 @@ class VisibilityWorker {
       for (int value : info.bbox_obj) row.add(value);
       for (int value : info.bbox_visib) row.add(value);
       object_rows += row.str();
-      objects.push_back(info_json(info));
     }
     CsvRow image_row;
     image_row.add(key.split)
@@ -215,7 +222,9 @@ class VisibilityWorker {
     output.summary = {
         {"objects", objects},
         {"scene_visibility", result.scene_visibility ? nlohmann::json(*result.scene_visibility)
-                                                     : nlohmann::json(nullptr)}};
+                                                     : nlohmann::json(nullptr)},
+        {"input_checks", input_checks_of(view)}};
+    if (view.target_gt) output.summary["targets"] = *view.target_gt;
     if (arguments_.masks) write_masks(key, masks, &output);
     if (arguments_.overlays) write_overlay(key, view, masks, labels, result, measured_mm, &output);
     return output;
@@ -395,10 +404,15 @@ class VisibilitySummary : public SummaryBuilder {
     const nlohmann::json& objects = record.summary.at("objects");
     ++images_;
     if (objects.empty()) ++images_without_objects_;
+    input_checks_.add(record.summary.at("input_checks"));
     std::vector<BopGtInfo> infos;
-    for (const nlohmann::json& object : objects) {
-      infos.push_back(info_from_json(object));
-      objects_.add(infos.back().visib_fract);
+    for (const nlohmann::json& object : objects) infos.push_back(info_from_json(object));
+    if (record.summary.contains("targets")) {
+      for (const nlohmann::json& gt : record.summary.at("targets")) {
+        objects_.add(infos.at(gt.get<std::size_t>()).visib_fract);
+      }
+    } else {
+      for (const BopGtInfo& info : infos) objects_.add(info.visib_fract);
     }
     const nlohmann::json& scene = record.summary.at("scene_visibility");
     if (scene.is_null()) {
@@ -420,6 +434,7 @@ class VisibilitySummary : public SummaryBuilder {
     summary["counts"]["images_with_undefined_scene_visibility"] = images_undefined_;
     summary["object_visibility"] = objects_.to_json("fully_hidden", "fully_visible");
     summary["scene_visibility"] = scenes_.to_json("zero", "one");
+    summary["input_checks"] = input_checks_.to_json();
     summary["timing"] =
         "per-run wall time and rates are in run.json (kept out of summary.json "
         "so that it is byte-identical across --jobs, resume and merge)";
@@ -444,6 +459,7 @@ class VisibilitySummary : public SummaryBuilder {
   std::map<int, std::vector<BopGtInfo>> scene_infos_;
   std::vector<std::string> bop_files_;
   Distribution objects_, scenes_;
+  InputCheckTotals input_checks_;
   std::int64_t images_ = 0, images_without_objects_ = 0, images_undefined_ = 0;
 };
 
@@ -463,7 +479,7 @@ void run_visibility(const VisibilityArguments& arguments, int* exit_code) {
   check.delta_mm = arguments.delta_mm;
   if (!check.IsValid(&why)) throw UsageError("--delta-mm: " + why);
   if (!arguments.depth.IsValid(&why)) throw UsageError(why);
-  const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset.dataset);
+  const datasets::BopDataset dataset = open_dataset(arguments.dataset);
   BatchJob job;
   job.output = find_batch_output("visibility");
   job.items = dataset.list_images(selection_of(arguments.dataset));

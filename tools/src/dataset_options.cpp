@@ -103,6 +103,22 @@ void add_dataset_options(CLI::App& command, DatasetOptions* options) {
                   "combine shard folders with `clutterscope merge`")
       ->type_name("I/N")
       ->check(validator("", [](const std::string& v) { parse_shard(v); }));
+  command
+      .add_option("--split-type", options->split_type,
+                  "BOP split type: reads folder SPLIT_TYPE (e.g. test_primesense) and the root "
+                  "camera_TYPE.json where it exists")
+      ->type_name("TYPE");
+  command
+      .add_option("--models-dir", options->models_dir,
+                  "models folder under DATASET (e.g. models_eval, models_cad)")
+      ->type_name("NAME")
+      ->capture_default_str();
+  command
+      .add_option("--targets", options->targets,
+                  "BOP test targets (test_targets_bop19.json: only the listed images and, per "
+                  "image, the instances of the listed obj_ids; test_targets_bop24.json: only "
+                  "the listed images)")
+      ->type_name("FILE");
   command.add_flag("--keep-going", options->keep_going,
                    "record images with bad data in summary.json and continue (exit code 1)");
   command.add_flag("--quiet,-q", options->quiet, "no progress output");
@@ -121,9 +137,13 @@ std::string format_id_list(const std::vector<int>& ids) {
   return text;
 }
 
+std::string split_folder(const DatasetOptions& options) {
+  return options.split_type.empty() ? options.split : options.split + "_" + options.split_type;
+}
+
 datasets::DatasetSelection selection_of(const DatasetOptions& options) {
   datasets::DatasetSelection selection;
-  selection.splits = {options.split};
+  selection.splits = {split_folder(options)};
   selection.scene_ids = parse_id_list(options.scenes, "--scenes");
   selection.image_ids = parse_id_list(options.images, "--images");
   return selection;
@@ -150,14 +170,61 @@ BatchOptions batch_options_of(const DatasetOptions& options, const std::string& 
   return batch;
 }
 
+datasets::BopDataset open_dataset(const DatasetOptions& options) {
+  datasets::BopOpenOptions open;
+  open.models_dir = options.models_dir;
+  open.camera_type = options.split_type;
+  std::string why;
+  if (!open.IsValid(&why)) throw UsageError("--models-dir/--split-type: " + why);
+  datasets::BopDataset dataset = datasets::BopDataset::open(options.dataset, open);
+  if (!options.targets.empty()) {
+    dataset.attach_targets(datasets::read_test_targets(options.targets), options.targets);
+  }
+  return dataset;
+}
+
+nlohmann::json input_checks_of(const datasets::SceneView& view) {
+  std::int64_t off = 0;
+  double worst = 0.0;
+  for (const datasets::GtInstance& object : view.objects) {
+    const double error = datasets::rotation_orthonormality_error(object.model_to_camera.linear());
+    if (error > datasets::kRotationReportThreshold) ++off;
+    worst = std::max(worst, error);
+  }
+  return {{"rotations_off", off}, {"max_rotation_error", worst}};
+}
+
+void InputCheckTotals::add(const nlohmann::json& image_checks) {
+  rotations_off_orthonormal_ += image_checks.at("rotations_off").get<std::int64_t>();
+  max_rotation_error_ =
+      std::max(max_rotation_error_, image_checks.at("max_rotation_error").get<double>());
+}
+
+nlohmann::json InputCheckTotals::to_json() const {
+  return {{"rotations_off_orthonormal_1e-6", rotations_off_orthonormal_},
+          {"max_rotation_orthonormality_error", max_rotation_error_},
+          {"note",
+           "GT rotations (cam_R_m2c) are used as stored, as bop_toolkit does; accepted up to "
+           "|R^T R - I| = 0.02, refused beyond"}};
+}
+
 nlohmann::json dataset_fingerprint(const DatasetOptions& options) {
   std::error_code error;
   fs::path dataset = fs::weakly_canonical(fs::absolute(options.dataset), error);
   if (error) dataset = fs::absolute(options.dataset).lexically_normal();
-  return {{"dataset", dataset.string()},
-          {"split", options.split},
-          {"scenes", format_id_list(parse_id_list(options.scenes, "--scenes"))},
-          {"images", format_id_list(parse_id_list(options.images, "--images"))}};
+  nlohmann::json fingerprint = {
+      {"dataset", dataset.string()},
+      {"split", options.split},
+      {"scenes", format_id_list(parse_id_list(options.scenes, "--scenes"))},
+      {"images", format_id_list(parse_id_list(options.images, "--images"))}};
+  if (!options.split_type.empty()) fingerprint["split_type"] = options.split_type;
+  if (options.models_dir != "models") fingerprint["models_dir"] = options.models_dir;
+  if (!options.targets.empty()) {
+    fs::path targets = fs::weakly_canonical(fs::absolute(options.targets), error);
+    if (error) targets = fs::absolute(options.targets).lexically_normal();
+    fingerprint["targets"] = targets.string();
+  }
+  return fingerprint;
 }
 
 }  // namespace clutterscope::tools

@@ -146,6 +146,8 @@ nlohmann::ordered_json run_record(const ReportArguments& arguments, const fs::pa
     failures[step] = summary.at("counts").at("failures");
   }
   run["failed_images"] = failures;
+  // The checks on the GT both steps read (rotations off orthonormal), as visibility counted.
+  run["input_checks"] = read_json(dir / "visibility" / "summary.json").at("input_checks");
   const report::ReportOptions& analysis = arguments.analysis;
   run["analysis"] = {{"accurate_cm", analysis.accurate_cm},
                      {"variance_threshold_cm2", analysis.variance_threshold_cm2},
@@ -222,16 +224,26 @@ fs::path beliefs_csv(const fs::path& estimate_dir, const report::ImageSummary& i
          (six_digits(image.im_id) + ".csv");
 }
 
+// --split-type, --models-dir and --targets where given, for the steps' command lines.
+void append_dataset_layout_options(const DatasetOptions& dataset, std::vector<std::string>* line) {
+  if (!dataset.split_type.empty()) line->insert(line->end(), {"--split-type", dataset.split_type});
+  if (dataset.models_dir != "models") {
+    line->insert(line->end(), {"--models-dir", dataset.models_dir});
+  }
+  if (!dataset.targets.empty()) line->insert(line->end(), {"--targets", dataset.targets});
+}
+
 std::vector<std::string> belief_command_line(const ReportArguments& arguments,
                                              const report::ImageSummary& image,
                                              const fs::path& out) {
   std::vector<std::string> line = {"estimate", arguments.dataset.dataset,
                                    "--out",    out.string(),
-                                   "--split",  image.split,
+                                   "--split",  arguments.dataset.split,
                                    "--scenes", std::to_string(image.scene_id),
                                    "--images", std::to_string(image.im_id),
                                    "--jobs",   "1",
                                    "--quiet",  "--save-beliefs"};
+  append_dataset_layout_options(arguments.dataset, &line);
   if (arguments.dataset.keep_going) line.push_back("--keep-going");
   append_estimate_options(arguments, &line);
   return line;
@@ -303,7 +315,7 @@ BeliefFigures belief_figures(const ReportArguments& arguments, const fs::path& d
       report::choose_belief_images(analysis.images, arguments.analysis.images_with_beliefs);
   if (chosen.empty()) return figures;
   const bool saved_by_estimate = arguments.estimate.count("--save-beliefs") > 0;
-  const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset.dataset);
+  const datasets::BopDataset dataset = open_dataset(arguments.dataset);
   for (const report::ImageSummary& image : chosen) {
     fs::path samples = beliefs_csv(dir / "estimate", image);
     if (!saved_by_estimate) {
@@ -349,6 +361,7 @@ std::vector<std::string> step_command_line(const ReportArguments& arguments,
       "--split", dataset.split,   "--jobs", std::to_string(dataset.jobs)};
   if (!dataset.scenes.empty()) line.insert(line.end(), {"--scenes", dataset.scenes});
   if (!dataset.images.empty()) line.insert(line.end(), {"--images", dataset.images});
+  append_dataset_layout_options(dataset, &line);
   if (dataset.keep_going) line.push_back("--keep-going");
   if (dataset.quiet) line.push_back("--quiet");
   if (command == "estimate") {

@@ -18,6 +18,16 @@
 
 namespace clutterscope::datasets {
 
+// Rotations (cam_R_m2c, cam_R_w2c) are accepted while |R^T R - I| (largest entry) is at most
+// this, and used exactly as stored, as bop_toolkit does: published BOP files round them (LM-O
+// reaches about 1e-2). Beyond it the reader refuses the file naming the value.
+constexpr double kRotationOrthonormalityTolerance = 2e-2;
+// Rotations further than this from orthonormal are counted in summary.json's input_checks.
+constexpr double kRotationReportThreshold = 1e-6;
+
+// max |R^T R - I| over the entries: 0 for a rotation, about 2 |e| for a matrix scaled by 1 + e.
+double rotation_orthonormality_error(const Eigen::Matrix3d& rotation);
+
 // Which images of a dataset to visit. Empty lists mean "all".
 struct DatasetSelection {
   std::vector<std::string> splits = {"test"};
@@ -29,20 +39,43 @@ struct BopOpenOptions {
   // Parsed scenes kept in memory (least recently used evicted). Memory is bounded by this, not
   // by the number of images; keep it at least the number of threads calling load().
   std::size_t scene_cache_capacity = 8;
+  // The models folder under the root: "models", or BOP's "models_eval", "models_cad", ...
+  std::string models_dir = "models";
+  // BOP's split/camera type ("primesense" in T-LESS): the root camera file is then
+  // camera_TYPE.json where it exists (else camera.json). Empty: camera.json.
+  std::string camera_type;
   bool IsValid(std::string* why) const;
 };
+
+// A BOP test-target list (test_targets_bop19.json / test_targets_bop24.json): the images, and
+// for bop19 the objects per image, that BOP's evaluation scores.
+struct TestTargets {
+  // bop19 (localisation): entries carry obj_id and inst_count, and only the GT instances of
+  // the listed obj_ids are targets. bop24 (detection): entries are images only.
+  bool per_object = false;
+  // (scene_id, im_id) -> obj_id -> inst_count (empty maps for bop24).
+  std::map<std::pair<int, int>, std::map<int, int>> images;
+};
+
+// Parses a test-target list: a JSON array of {"scene_id", "im_id"} objects, each with
+// "obj_id" and "inst_count" (bop19) or without both (bop24), not mixed. Ids must be
+// non-negative integers, inst_count >= 1; an (image, obj_id) or (bop24) image listed twice is
+// refused. Throws DatasetError naming `path` and the entry. read_test_targets reads the file.
+TestTargets parse_test_targets(const std::string& text, const std::filesystem::path& path);
+TestTargets read_test_targets(const std::filesystem::path& path);
 
 // A BOP dataset on disk. open() reads only the models; scenes are read lazily, one scene's
 // JSON at a time, so memory does not grow with the number of images. load() is thread-safe;
 // attach_detections() is not (call it before starting workers).
 //
-// Image size: BOP's scene_camera.json has none, so it is camera.json's width and height at the
-// dataset root, else the header of the scene's first rgb/gray image, else of its first depth
-// image. A depth image of another size is refused by load_depth (never rescaled or trusted).
+// Image size: BOP's scene_camera.json has none, so it is camera.json's (camera_TYPE.json's)
+// width and height at the dataset root, else the header of the scene's first rgb/gray image,
+// else of its first depth image. A depth image of another size is refused by load_depth (never
+// rescaled or trusted).
 class BopDataset {
  public:
-  // Throws DatasetError when models/models_info.json (or models_names.json, camera.json when
-  // present) is missing or malformed.
+  // Throws DatasetError when MODELS/models_info.json (or models_names.json, camera.json when
+  // present) is missing or malformed; MODELS is options.models_dir.
   static BopDataset open(const std::filesystem::path& root);
   static BopDataset open(const std::filesystem::path& root, const BopOpenOptions& options);
 
@@ -71,6 +104,14 @@ class BopDataset {
   // Attach a BOP 2D detections JSON file; load() then fills SceneView::detections.
   void attach_detections(const std::filesystem::path& detections_json);
 
+  // Restrict the dataset to test targets (not thread-safe: call before starting workers).
+  // list_images() then lists only the targets' images (still filtered by the selection) and
+  // throws DatasetError naming the targets file for a target scene or image the selected
+  // split lacks. With per-object (bop19) targets load() fills SceneView::target_gt with the
+  // instances of the listed obj_ids, and throws DatasetError for a listed obj_id with fewer
+  // instances in scene_gt.json than its inst_count.
+  void attach_targets(TestTargets targets, std::filesystem::path targets_file);
+
   // Number of parsed scenes currently held (at most options.scene_cache_capacity).
   std::size_t cached_scene_count() const;
 
@@ -90,12 +131,17 @@ class BopDataset {
   std::shared_ptr<const SceneFiles> scene(const std::string& split, int scene_id) const;
   void check_model_file(const ModelInfo& model, const std::filesystem::path& scene_gt_path,
                         const std::string& where) const;
+  void check_targets_exist(const std::vector<std::string>& split_names) const;
+  std::vector<int> target_instances(const SceneView& view) const;
 
   std::filesystem::path root_;
+  std::filesystem::path models_info_path_;
   std::vector<ModelInfo> models_;
   std::map<int, size_t> model_index_;
   std::optional<RootCamera> root_camera_;
   std::map<std::tuple<int, int>, std::vector<Detection>> detections_;  // (scene, image)
+  std::optional<TestTargets> targets_;
+  std::filesystem::path targets_file_;
   std::unique_ptr<SceneCache> cache_;
 };
 

@@ -36,7 +36,9 @@ std::string to_string(GravitySource source);
 
 // The world (z up) to camera transform used for inference: the camera's world pose when the
 // dataset has cam_R_w2c/cam_t_w2c, else the pose of the first fixed instance (its model z is
-// up), else an upright camera (world z = camera -y).
+// up), else an upright camera (world z = camera -y). Callers invert the frame as an isometry,
+// so a rotation further than kRotationReportThreshold from orthonormal (BOP files round them)
+// is replaced by the nearest rotation; one within it is returned as stored.
 Eigen::Isometry3d gravity_frame(const SceneView& view, const std::vector<int>& fixed,
                                 GravitySource* source = nullptr);
 

@@ -84,6 +84,10 @@ struct SceneView {
   std::vector<GtInstance> objects;
   std::optional<SceneGraph> graph;
   std::vector<Detection> detections;
+  // Indices into `objects` of the instances BOP's bop19 test targets select; absent when every
+  // instance is a target. The others still occlude: callers compute with all of them and
+  // report only these.
+  std::optional<std::vector<int>> target_gt;
   std::filesystem::path depth_path;  // empty when the dataset has no measured depth
   std::filesystem::path rgb_path;    // empty when absent
 };
