@@ -144,6 +144,12 @@ void add_view(Digest& digest, const datasets::SceneView& view) {
   for (const datasets::GtInstance& object : view.objects) {
     digest.add(object.obj_id).add_matrix(object.model_to_camera.matrix());
   }
+  // --targets (bop19) selects the reported instances.
+  digest.add(view.target_gt.has_value());
+  if (view.target_gt) {
+    digest.add(static_cast<std::uint64_t>(view.target_gt->size()));
+    for (const int instance : *view.target_gt) digest.add(instance);
+  }
   digest.add(view.graph.has_value());
   if (view.graph) {
     for (const auto* pairs : {&view.graph->support, &view.graph->non_contact}) {

@@ -72,10 +72,10 @@ class FileDigestCache {
 };
 
 // The digest of everything one image's results depend on in a BOP dataset: its parsed
-// camera (K, size, depth_scale, world pose), GT instances, scene graph and detections; the
-// bytes of its depth and RGB images; the models_info entries of every model and the mesh
-// bytes of the models it shows. A bad image (load() throws DatasetError) digests its error
-// message, so a once-good image that became bad is recomputed (and fails). Thread-safe.
+// camera (K, size, depth_scale, world pose), GT instances (and the --targets selection), scene
+// graph and detections; the bytes of its depth and RGB images; the models_info entries of every
+// model and the mesh bytes of the models it shows. A bad image (load() throws DatasetError) digests
+// its error message, so a once-good image that became bad is recomputed (and fails). Thread-safe.
 using ImageDigest = std::function<std::uint64_t(const datasets::ImageKey&, FileDigestCache&)>;
 ImageDigest bop_image_digest(const datasets::BopDataset& dataset);
 
