@@ -9,6 +9,12 @@ function(clutterscope_configure_target target)
     target_compile_options(${target} PRIVATE -fsanitize=undefined -fno-sanitize-recover=undefined)
     target_link_options(${target} PRIVATE -fsanitize=undefined)
   endif()
+  if(CLUTTERSCOPE_FUZZ)
+    # Coverage instrumentation for libFuzzer; the fuzz executables add -fsanitize=fuzzer.
+    target_compile_options(${target} PRIVATE -fsanitize=fuzzer-no-link,address,undefined
+                                             -fno-sanitize-recover=undefined -fno-omit-frame-pointer)
+    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
+  endif()
   if(CLUTTERSCOPE_CLANG_TIDY)
     find_program(CLANG_TIDY_EXE NAMES clang-tidy REQUIRED)
     set_target_properties(${target} PROPERTIES CXX_CLANG_TIDY "${CLANG_TIDY_EXE}")

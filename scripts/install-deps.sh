@@ -4,8 +4,10 @@
 set -euo pipefail
 
 packages=(
-  # toolchain
-  build-essential cmake ninja-build pkg-config git
+  # toolchain (ccache is used when present)
+  build-essential cmake ninja-build pkg-config git ccache
+  # fuzzing: clang with libFuzzer and the sanitizer runtimes (scripts/fuzz.sh)
+  clang libclang-rt-14-dev
   # libraries
   libeigen3-dev nlohmann-json3-dev libcli11-dev libglm-dev libnanoflann-dev
   libassimp-dev

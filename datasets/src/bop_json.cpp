@@ -134,6 +134,14 @@ double finite_number(const Json& value, const char* field, const FieldContext& c
 }
 
 int integer(const Json& value, const char* field, const FieldContext& context) {
+  if (value.is_number_unsigned()) {
+    // Read as unsigned: as long long, 18446744073709551615 would wrap to -1.
+    const auto number = value.get<unsigned long long>();
+    if (number > static_cast<unsigned long long>(std::numeric_limits<int>::max())) {
+      context.fail(std::string(field) + " is out of range: " + std::to_string(number));
+    }
+    return static_cast<int>(number);
+  }
   if (value.is_number_integer()) {
     const auto number = value.get<long long>();
     if (number < std::numeric_limits<int>::min() || number > std::numeric_limits<int>::max()) {

@@ -217,6 +217,24 @@ TEST_F(BopBadInput, ObjIdOfTheWrongType) {
                   {"scene_gt.json", "scene 1, image 0, gt 1: obj_id must be an integer"});
 }
 
+TEST_F(BopBadInput, ObjIdBeyondTheIntegerRangeIsNotWrappedToANegativeId) {
+  // nlohmann holds 2^64 - 1 as an unsigned number; read as long long it was -1.
+  replace_first(scene_file("scene_gt.json"), "\"obj_id\": 2", "\"obj_id\": 18446744073709551615");
+  expect_mentions(load_error(), {"scene_gt.json",
+                                 "scene 1, image 0, gt 1: obj_id is out of "
+                                 "range: 18446744073709551615"});
+}
+
+TEST_F(BopBadInput, DetectionImageIdBeyondTheIntegerRange) {
+  BopDataset dataset = BopDataset::open(dir_.path());
+  const fs::path path = dir_.path() / "detections.json";
+  write_text(path,
+             "[{\"scene_id\": 1, \"image_id\": 18446744073709551615, \"category_id\": 1, "
+             "\"score\": 1, \"bbox\": [0, 0, 1, 1]}]");
+  expect_mentions(dataset_error([&] { dataset.attach_detections(path); }),
+                  {"detections.json", "detection 0: image_id is out of range"});
+}
+
 TEST_F(BopBadInput, MissingFieldInSceneGt) {
   replace_first(scene_file("scene_gt.json"), kFirstRotation, "\"rotation\": []");
   expect_mentions(load_error(), {"scene_gt.json", "scene 1, image 0, gt 0: cam_R_m2c is missing"});

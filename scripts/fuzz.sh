@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets of tests/fuzz into build-fuzz/ (clang, ASan + UBSan) and runs
+# each one from its seed corpus (tests/fuzz/corpus/NAME) and its saved crash inputs
+# (tests/fuzz/regressions/NAME) for CLUTTERSCOPE_FUZZ_SECONDS seconds (default 25).
+# Arguments: target names (default: every target with a corpus folder).
+# New inputs go to build-fuzz/fuzz-corpus/NAME, crash inputs to build-fuzz/fuzz-artifacts/NAME,
+# the fuzzer's log to build-fuzz/fuzz-logs/NAME.log. Fails when any target crashes, leaks,
+# hangs (CLUTTERSCOPE_FUZZ_TIMEOUT seconds for one input, default 10) or runs out of memory.
+# CLUTTERSCOPE_FUZZ_NO_BUILD=1 skips the build.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+source scripts/sanitizer-env.sh
+seconds="${CLUTTERSCOPE_FUZZ_SECONDS:-25}"
+timeout_s="${CLUTTERSCOPE_FUZZ_TIMEOUT:-10}"
+jobs="${CLUTTERSCOPE_BUILD_JOBS:-$(nproc)}"
+
+if [ "${CLUTTERSCOPE_FUZZ_NO_BUILD:-0}" != 1 ]; then
+  start=$SECONDS
+  cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS=-g1 \
+    -DCMAKE_CXX_COMPILER=clang++ -DCLUTTERSCOPE_FUZZ=ON "${CLUTTERSCOPE_LAUNCHER[@]}" >/dev/null
+  cmake --build build-fuzz --parallel "$jobs" --target clutterscope_fuzz_targets
+  echo "fuzz: build took $((SECONDS - start)) s"
+fi
+
+targets=("$@")
+if [ "${#targets[@]}" -eq 0 ]; then
+  for dir in tests/fuzz/corpus/*/; do targets+=("$(basename "$dir")"); done
+fi
+
+failed=()
+for target in "${targets[@]}"; do
+  binary="build-fuzz/tests/fuzz/fuzz_$target"
+  work="build-fuzz/fuzz-corpus/$target"
+  artifacts="build-fuzz/fuzz-artifacts/$target"
+  log="build-fuzz/fuzz-logs/$target.log"
+  mkdir -p "$work" "$artifacts" "$(dirname "$log")"
+  inputs=("tests/fuzz/corpus/$target")
+  if [ -d "tests/fuzz/regressions/$target" ]; then inputs+=("tests/fuzz/regressions/$target"); fi
+  start=$SECONDS
+  status=0
+  "$binary" -max_total_time="$seconds" -timeout="$timeout_s" -rss_limit_mb=2048 \
+    -print_final_stats=1 -artifact_prefix="$artifacts/" "$work" "${inputs[@]}" >"$log" 2>&1 ||
+    status=$?
+  executions=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+  if [ "$status" -eq 0 ]; then
+    echo "fuzz: $target: ${executions:-?} executions in $((SECONDS - start)) s, no crash"
+  else
+    echo "fuzz: $target: FAILED (exit $status) after $((SECONDS - start)) s; log $log:"
+    grep -E "ERROR|SUMMARY|Test unit written|runtime error" "$log" | head -20 || true
+    tail -40 "$log"
+    failed+=("$target")
+  fi
+done
+if [ "${#failed[@]}" -gt 0 ]; then
+  echo "fuzz: ${#failed[@]} target(s) failed: ${failed[*]}"
+  exit 1
+fi
