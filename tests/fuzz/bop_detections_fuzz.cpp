@@ -3,6 +3,6 @@
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  clutterscope::fuzz::run_dataset_with("detections.json", data, size, {"detections.json", false});
+  clutterscope::fuzz::run_dataset_with("detections.json", data, size, {"detections.json", false, {}});
   return 0;
 }

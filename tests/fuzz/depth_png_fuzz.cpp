@@ -4,6 +4,6 @@
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  clutterscope::fuzz::run_dataset_with("test/000000/depth/000000.png", data, size, {"", true});
+  clutterscope::fuzz::run_dataset_with("test/000000/depth/000000.png", data, size, {"", true, {}});
   return 0;
 }

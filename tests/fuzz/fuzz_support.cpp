@@ -101,6 +101,9 @@ void use_dataset(const fs::path& root, const DatasetUse& use) {
   try {
     dataset = datasets::BopDataset::open(root);
     if (!use.detections.empty()) dataset->attach_detections(root / use.detections);
+    if (!use.targets.empty()) {
+      dataset->attach_targets(datasets::read_test_targets(root / use.targets), root / use.targets);
+    }
     keys = dataset->list_images(datasets::DatasetSelection{});
   } catch (const datasets::DatasetError&) {
     return;

@@ -24,14 +24,15 @@ void write_bytes(const std::filesystem::path& path, const std::uint8_t* data, st
 struct DatasetUse {
   std::filesystem::path detections;  // relative to the dataset root; attached when not empty
   bool decode_depth = false;         // load_depth and load_bop_depth_mm on every loaded view
+  std::filesystem::path targets;     // BOP test targets, relative to the root; attached likewise
 };
 
 // Lays out (once per process) a small valid BOP dataset: models/models_info.json and
 // models_names.json (objects 1..16, 100 mm boxes, non-empty model files), camera.json
 // (640x480), test/000000/{scene_camera,scene_gt,scene_graph}.json with image 0 holding ten
 // instances. Then replaces `relative_file` with the input and does what a command does:
-// open, attach detections, list the images of split "test", load each one (and decode its
-// depth). DatasetError is caught per call, as the CLI does (per image under --keep-going).
+// open, attach detections and targets, list the images of split "test", load each one (and decode
+// its depth). DatasetError is caught per call, as the CLI does (per image under --keep-going).
 void run_dataset_with(const std::filesystem::path& relative_file, const std::uint8_t* data,
                       std::size_t size, const DatasetUse& use = {});
 
