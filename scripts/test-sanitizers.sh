@@ -11,5 +11,5 @@ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS=-
 cmake --build build-asan --parallel "$jobs"
 echo "sanitizers: build took $((SECONDS - start)) s"
 start=$SECONDS
-(cd build-asan && ctest --output-on-failure --timeout 1800 "$@")
+(cd build-asan && ctest --output-on-failure --timeout 1800 -j "$jobs" "$@")
 echo "sanitizers: test suite took $((SECONDS - start)) s"

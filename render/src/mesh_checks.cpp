@@ -30,6 +30,15 @@ void for_each_line(const std::filesystem::path& path, std::string_view bytes, Vi
   }
 }
 
+bool finite_number(std::string_view token) {
+  if (!token.empty() && token[0] == '+') token.remove_prefix(1);
+  double value = 0;
+  const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+  return ec == std::errc() && ptr == token.data() + token.size() && std::isfinite(value);
+}
+
+}  // namespace
+
 std::vector<std::string_view> tokens_of(std::string_view line) {
   std::vector<std::string_view> tokens;
   std::size_t i = 0;
@@ -41,15 +50,6 @@ std::vector<std::string_view> tokens_of(std::string_view line) {
   }
   return tokens;
 }
-
-bool finite_number(std::string_view token) {
-  if (!token.empty() && token[0] == '+') token.remove_prefix(1);
-  double value = 0;
-  const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-  return ec == std::errc() && ptr == token.data() + token.size() && std::isfinite(value);
-}
-
-}  // namespace
 
 void check_obj(const std::filesystem::path& path, std::string_view bytes) {
   // First pass: how many positions, texture coordinates and normals the file declares.

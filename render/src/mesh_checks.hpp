@@ -4,11 +4,16 @@
 
 #include <filesystem>
 #include <string_view>
+#include <vector>
 
 namespace clutterscope::render::detail {
 
 // Lines of OBJ and ASCII STL files longer than this are refused.
 inline constexpr std::size_t kMaxTextLine = 1 << 16;
+
+// The words of a text line, split at spaces and tabs (the separators of PLY headers, OBJ and
+// ASCII STL).
+std::vector<std::string_view> tokens_of(std::string_view line);
 
 // OBJ: bounded lines; `v` lines hold 3 or more finite numbers; every index of `f`, `l` and
 // `p` lines (v, v/vt, v//vn, v/vt/vn; negative ones relative to the vertices read so far) is

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "mesh_checks.hpp"
+
 namespace clutterscope::render::detail {
 
 namespace {
@@ -69,18 +71,6 @@ struct Header {
   std::size_t body_offset = 0;
 };
 
-std::vector<std::string_view> split(std::string_view line) {
-  std::vector<std::string_view> tokens;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
-    const std::size_t start = i;
-    while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
-    if (i > start) tokens.push_back(line.substr(start, i - start));
-  }
-  return tokens;
-}
-
 class PlyParser {
  public:
   PlyParser(const std::filesystem::path& path, std::string_view bytes)
@@ -110,7 +100,7 @@ class PlyParser {
       }
       offset = end + 1;
       if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-      const std::vector<std::string_view> tokens = split(line);
+      const std::vector<std::string_view> tokens = tokens_of(line);
       if (line_number == 1) {
         if (line != "ply") fail("not a PLY file (the first line is not 'ply')");
         continue;

@@ -15,42 +15,14 @@ namespace clutterscope::datasets {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::dataset_error;
+using testing::expect_mentions;
 using testing::read_text;
+using testing::replace_first;
 using testing::ScratchDir;
 using testing::TinyBopOptions;
 using testing::write_text;
 using testing::write_tiny_bop_dataset;
-
-// The message of the DatasetError thrown by `action`; a test failure if none is thrown.
-std::string dataset_error(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const DatasetError& error) {
-    return error.what();
-  } catch (const std::exception& error) {
-    ADD_FAILURE() << "expected DatasetError, got another exception: " << error.what();
-    return "";
-  }
-  ADD_FAILURE() << "expected DatasetError, nothing was thrown";
-  return "";
-}
-
-// Expects every one of `parts` in `message`.
-void expect_mentions(const std::string& message, std::initializer_list<std::string> parts) {
-  for (const auto& part : parts) {
-    EXPECT_NE(message.find(part), std::string::npos)
-        << "message does not mention \"" << part << "\":\n  " << message;
-  }
-}
-
-// Replaces the first occurrence of `from` in a file (which must contain it).
-void replace_first(const fs::path& path, const std::string& from, const std::string& to) {
-  std::string text = read_text(path);
-  const size_t at = text.find(from);
-  ASSERT_NE(at, std::string::npos) << from << " not in " << path;
-  text.replace(at, from.size(), to);
-  write_text(path, text);
-}
 
 class BopBadInput : public ::testing::Test {
  protected:

@@ -13,13 +13,19 @@
 //   graph: support [[0, 1]], non_contact [[1, 2]], fixed [0]
 //   depth raw(v, u) = 7000 + u (0 at u = v = 0), depth_scale 0.1 -> 700.0 + 0.1 u mm
 
+#include <gtest/gtest.h>
+
 #include <Eigen/Geometry>
 #include <atomic>
+#include <clutterscope/datasets/errors.hpp>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <initializer_list>
+#include <map>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
@@ -251,6 +257,50 @@ inline fs::path write_tiny_bop_dataset(const fs::path& root, const TinyBopOption
     write_text(root / "camera.json", camera.str());
   }
   return root;
+}
+
+// The message of the DatasetError thrown by `action`; a test failure if none is thrown.
+inline std::string dataset_error(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const datasets::DatasetError& error) {
+    return error.what();
+  } catch (const std::exception& error) {
+    ADD_FAILURE() << "expected DatasetError, got another exception: " << error.what();
+    return "";
+  }
+  ADD_FAILURE() << "expected DatasetError, nothing was thrown";
+  return "";
+}
+
+// Expects every one of `parts` in `message`.
+inline void expect_mentions(const std::string& message, std::initializer_list<std::string> parts) {
+  for (const auto& part : parts) {
+    EXPECT_NE(message.find(part), std::string::npos)
+        << "message does not mention \"" << part << "\":\n  " << message;
+  }
+}
+
+// Replaces the first occurrence of `from` in a file (which must contain it).
+inline void replace_first(const fs::path& path, const std::string& from, const std::string& to) {
+  std::string text = read_text(path);
+  const size_t at = text.find(from);
+  ASSERT_NE(at, std::string::npos) << from << " not in " << path;
+  text.replace(at, from.size(), to);
+  write_text(path, text);
+}
+
+// Every file of a batch output folder except its bookkeeping (.batch/, run.json): relative
+// path -> bytes.
+inline std::map<std::string, std::string> batch_result_files(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    if (!entry.is_regular_file()) continue;
+    const std::string relative = fs::relative(entry.path(), dir).generic_string();
+    if (relative.rfind(".batch", 0) == 0 || relative == "run.json") continue;
+    files[relative] = read_text(entry.path());
+  }
+  return files;
 }
 
 }  // namespace clutterscope::testing

@@ -21,24 +21,13 @@ namespace clutterscope::tools {
 namespace {
 
 namespace fs = std::filesystem;
+using clutterscope::testing::batch_result_files;
 using clutterscope::testing::CommandRun;
 using clutterscope::testing::quoted;
 using clutterscope::testing::read_text;
 using clutterscope::testing::run_merged;
 using clutterscope::testing::ScratchDir;
 using clutterscope::testing::write_text;
-
-// Every file of a batch folder except its bookkeeping (.batch/, run.json).
-std::map<std::string, std::string> final_files(const fs::path& dir) {
-  std::map<std::string, std::string> files;
-  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
-    if (!entry.is_regular_file()) continue;
-    const std::string relative = fs::relative(entry.path(), dir).generic_string();
-    if (relative.rfind(".batch", 0) == 0 || relative == "run.json") continue;
-    files[relative] = read_text(entry.path());
-  }
-  return files;
-}
 
 // objects.csv rows of one scene.
 std::string scene_rows(const fs::path& objects_csv, int scene) {
@@ -94,7 +83,7 @@ TEST_F(ResumeCli, AnEditedSceneGtRecomputesItsImageAndMatchesAFreshRun) {
 
   const fs::path fresh = scratch_.path() / "fresh";
   ASSERT_EQ(run_merged(visibility(fresh)).exit_code, 0);
-  const auto expected = final_files(fresh), actual = final_files(out);
+  const auto expected = batch_result_files(fresh), actual = batch_result_files(out);
   ASSERT_EQ(expected.size(), actual.size());
   for (const auto& [name, bytes] : expected) {
     ASSERT_TRUE(actual.count(name)) << name;
@@ -105,7 +94,7 @@ TEST_F(ResumeCli, AnEditedSceneGtRecomputesItsImageAndMatchesAFreshRun) {
 TEST_F(ResumeCli, ATouchedButUnchangedDatasetResumesEverything) {
   const fs::path out = scratch_.path() / "out";
   ASSERT_EQ(run_merged(visibility(out)).exit_code, 0);
-  const auto before = final_files(out);
+  const auto before = batch_result_files(out);
   // New modification times, same bytes (as a copy or a checkout would leave them).
   for (const auto& entry : fs::recursive_directory_iterator(data())) {
     if (entry.is_regular_file()) {
@@ -117,13 +106,13 @@ TEST_F(ResumeCli, ATouchedButUnchangedDatasetResumesEverything) {
   EXPECT_NE(again.output.find("(0 computed, 6 resumed, 0 failed)"), std::string::npos)
       << again.output;
   EXPECT_EQ(again.output.find("recomputed"), std::string::npos) << again.output;
-  EXPECT_TRUE(final_files(out) == before);
+  EXPECT_TRUE(batch_result_files(out) == before);
 }
 
 TEST_F(ResumeCli, CommandsRefuseFoldersOfOtherCommandsAndDatasets) {
   const fs::path vis = scratch_.path() / "vis";
   ASSERT_EQ(run_merged(visibility(vis)).exit_code, 0);
-  const auto vis_files = final_files(vis);
+  const auto vis_files = batch_result_files(vis);
   const std::string marker = (vis / ".batch" / "job.json").string();
   const std::string tray = quoted(data());
   const std::vector<std::string> refused = {
@@ -141,7 +130,7 @@ TEST_F(ResumeCli, CommandsRefuseFoldersOfOtherCommandsAndDatasets) {
         << command << "\n"
         << run.output;
   }
-  EXPECT_TRUE(final_files(vis) == vis_files) << "a refused command touched the folder";
+  EXPECT_TRUE(batch_result_files(vis) == vis_files) << "a refused command touched the folder";
 
   // The dataset itself is no output folder.
   const CommandRun into_dataset = run_merged(visibility(data()));

@@ -21,6 +21,7 @@ namespace clutterscope::visibility {
 namespace {
 
 namespace fs = std::filesystem;
+using clutterscope::testing::batch_result_files;
 using clutterscope::testing::read_text;
 using clutterscope::testing::ScratchDir;
 using clutterscope::testing::TinyBopOptions;
@@ -31,21 +32,8 @@ using clutterscope::testing::CommandRun;
 using clutterscope::testing::quoted;
 using clutterscope::testing::run_clutterscope;
 
-// Every file under `dir` except the batch bookkeeping (.batch/, run.json), relative path ->
-// bytes.
-std::map<std::string, std::string> final_files(const fs::path& dir) {
-  std::map<std::string, std::string> files;
-  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
-    if (!entry.is_regular_file()) continue;
-    const std::string relative = fs::relative(entry.path(), dir).generic_string();
-    if (relative.rfind(".batch", 0) == 0 || relative == "run.json") continue;
-    files[relative] = read_text(entry.path());
-  }
-  return files;
-}
-
 void expect_same_files(const fs::path& a, const fs::path& b) {
-  const auto files_a = final_files(a), files_b = final_files(b);
+  const auto files_a = batch_result_files(a), files_b = batch_result_files(b);
   ASSERT_FALSE(files_a.empty());
   EXPECT_EQ(files_a.size(), files_b.size());
   for (const auto& [name, bytes] : files_b) {
