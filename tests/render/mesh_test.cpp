@@ -15,27 +15,14 @@
 #include <random>
 #include <string>
 
+#include "render/mesh_file_fixture.hpp"
+
 namespace clutterscope::render {
 namespace {
 
 namespace fs = std::filesystem;
 
-class MeshFiles : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("clutterscope_mesh_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path write(const std::string& name, const std::string& contents) const {
-    const fs::path path = dir_ / name;
-    std::ofstream(path, std::ios::binary) << contents;
-    return path;
-  }
-  fs::path dir_;
-};
+using MeshFiles = MeshFileTest;
 
 // Two triangles forming a 100 mm x 50 mm rectangle at z = 20 mm, in BOP's ASCII PLY form.
 constexpr const char* kAsciiPly = R"(ply

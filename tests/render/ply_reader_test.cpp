@@ -18,25 +18,15 @@
 // The hardened PLY reader behind load_mesh: hand-written small files with known results, the
 // malformed files that crashed or hung assimp, and agreement with assimp on valid files.
 
+#include "render/mesh_file_fixture.hpp"
+
 namespace clutterscope::render {
 namespace {
 
 namespace fs = std::filesystem;
 
-class PlyFiles : public ::testing::Test {
+class PlyFiles : public MeshFileTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("clutterscope_ply_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  fs::path write(const std::string& name, const std::string& contents) const {
-    const fs::path path = dir_ / name;
-    std::ofstream(path, std::ios::binary) << contents;
-    return path;
-  }
   // The message of the DatasetError that loading `contents` throws ("" if none).
   std::string error_of(const std::string& contents) const {
     const fs::path path = write("bad.ply", contents);
@@ -49,7 +39,6 @@ class PlyFiles : public ::testing::Test {
     ADD_FAILURE() << "no DatasetError";
     return "";
   }
-  fs::path dir_;
 };
 
 // Binary records written in either byte order.
