@@ -218,7 +218,8 @@ TEST_F(PlyFiles, HeaderTruncatedIsRefusedAtOnce) {
     const auto start = std::chrono::steady_clock::now();
     const std::string message = error_of(valid.substr(0, cut));
     EXPECT_NE(message.find("header: file ends inside the header"), std::string::npos) << message;
-    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(1));
+    // A hang guard, not a timing: assimp hung for ever on these files.
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(30));
   }
 }
 
