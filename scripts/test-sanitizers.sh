@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The whole test suite under AddressSanitizer + UndefinedBehaviorSanitizer: builds build-asan/
-# (gcc, optimised, line tables) and runs ctest there. Extra arguments go to ctest.
+# (gcc, optimised, line tables) and runs ctest there. Extra arguments go to every ctest run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/sanitizer-env.sh
@@ -11,5 +11,21 @@ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS=-
 cmake --build build-asan --parallel "$jobs"
 echo "sanitizers: build took $((SECONDS - start)) s"
 start=$SECONDS
-(cd build-asan && ctest --output-on-failure --timeout 1800 -j "$jobs" "$@")
+memory_test='^Generator\.ThousandScenesOfTenObjectsRunInConstantMemory$'
+cd build-asan
+# 1. Every test without GL, leaks included.
+ctest --output-on-failure --timeout 1800 -j "$jobs" -LE gl -E "$memory_test" "$@"
+# 2. The constant-memory test measures RSS: ASan's quarantine keeps freed blocks (256 MB by
+#    default), so without it RSS shows our allocations, not the quarantine filling up.
+ASAN_OPTIONS="$ASAN_OPTIONS:quarantine_size_mb=0" \
+  ctest --output-on-failure --timeout 1800 -R "$memory_test" "$@"
+# 3. GL tests, ASan and UBSan errors fail them, but not leaks: Mesa's DRI driver makes one-time
+#    allocations in eglInitialize (pthread_once inside the driver) and is dlclosed by
+#    eglTerminate, so at exit those blocks are unreachable and their stacks end in an unloaded
+#    module (realloc <- <unknown module> ...), which no LeakSanitizer suppression can name with
+#    the fast unwinder (the full stack, fast_unwind_on_malloc=0, reaches libEGL_mesa.so.0 and
+#    render/src/context.cpp's eglInitialize). Measured 2026-12-01: every GL test's only report
+#    was this leak (128-256 bytes).
+ASAN_OPTIONS="$ASAN_OPTIONS:detect_leaks=0" \
+  ctest --output-on-failure --timeout 1800 -j "$jobs" -L gl "$@"
 echo "sanitizers: test suite took $((SECONDS - start)) s"
