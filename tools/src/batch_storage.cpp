@@ -53,7 +53,6 @@ nlohmann::json read_json(const fs::path& path) {
 }
 
 void copy_file_atomically(const fs::path& from, const fs::path& to) {
-  fs::create_directories(to.parent_path());
   write_text_atomically(to, read_text(from));
 }
 
@@ -159,7 +158,6 @@ fs::path part_path(const fs::path& out_dir, const ImageKey& key, PartKind kind) 
 void write_ok_part(const fs::path& out_dir, const ImageKey& key, const ItemOutput& output,
                    std::optional<std::uint64_t> input_digest) {
   const fs::path path = part_path(out_dir, key, PartKind::kOk);
-  fs::create_directories(path.parent_path());
   nlohmann::json part = {
       {"tables", output.tables}, {"summary", output.summary}, {"files", output.files}};
   // "digest" sorts before the other keys, so read_part_digest reads only the file's start.
@@ -185,7 +183,6 @@ std::optional<std::uint64_t> read_part_digest(const fs::path& part) {
 
 void write_failed_part(const fs::path& out_dir, const ImageKey& key, const std::string& message) {
   const fs::path path = part_path(out_dir, key, PartKind::kFailed);
-  fs::create_directories(path.parent_path());
   write_text_atomically(path, nlohmann::json({{"error", message}}).dump() + "\n");
 }
 

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/files.hpp>
 #include <clutterscope/tools/batch.hpp>
 #include <clutterscope/tools/estimate/scene_estimate.hpp>
 #include <clutterscope/tools/formats.hpp>
@@ -59,13 +60,12 @@ void write_output_file(const fs::path& out_dir, const fs::path& relative,
                        const std::string& bytes) {
   static std::atomic<unsigned long> counter{0};
   const fs::path temporary_dir = out_dir / ".batch" / "tmp";
-  fs::create_directories(temporary_dir);
   const fs::path temporary =
       temporary_dir / (std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".tmp");
-  datasets::write_file_atomically(temporary, bytes);
+  datasets::write_file_atomically(temporary, bytes);  // creates temporary_dir
   const fs::path target = out_dir / relative;
-  fs::create_directories(target.parent_path());
-  fs::rename(temporary, target);
+  datasets::create_folders(target.parent_path());
+  datasets::rename_checked(temporary, target);
 }
 
 class EstimateWorker {

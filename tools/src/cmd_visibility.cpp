@@ -8,6 +8,7 @@
 #include <atomic>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/files.hpp>
 #include <clutterscope/render/bop_renderer.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/mesh.hpp>
@@ -83,13 +84,12 @@ void write_output_file(const fs::path& out_dir, const fs::path& relative,
                        const std::string& bytes) {
   static std::atomic<unsigned long> counter{0};
   const fs::path temporary_dir = out_dir / ".batch" / "tmp";
-  fs::create_directories(temporary_dir);
   const fs::path temporary =
       temporary_dir / (std::to_string(::getpid()) + "-" + std::to_string(counter++) + ".tmp");
-  datasets::write_file_atomically(temporary, bytes);
+  datasets::write_file_atomically(temporary, bytes);  // creates temporary_dir
   const fs::path target = out_dir / relative;
-  fs::create_directories(target.parent_path());
-  fs::rename(temporary, target);
+  datasets::create_folders(target.parent_path());
+  datasets::rename_checked(temporary, target);
 }
 
 // The per-item summary carries every instance's six fields (doubles round-trip exactly through
@@ -137,10 +137,9 @@ class VisibilityWorker {
   ItemOutput run(const datasets::ImageKey& key) {
     const datasets::SceneView view = dataset_.load(key);
     const std::string where = datasets::location(key.scene_id, key.im_id);
-    visibility::check_drawable(view.camera, visibility::kVisibilityCanvasFactor,
-                               options_.is_bop() ? bop_renderer_.max_target_size()
-                                                 : renderer_.max_target_size(),
-                               where);
+    visibility::check_drawable(
+        view.camera, visibility::kVisibilityCanvasFactor,
+        options_.is_bop() ? bop_renderer_.max_target_size() : renderer_.max_target_size(), where);
     const double depth_scale = arguments_.depth.depth_scale.value_or(view.camera.depth_scale);
     cv::Mat measured_mm;
     std::filesystem::path depth_path;

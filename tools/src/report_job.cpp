@@ -414,7 +414,6 @@ void prepare_report_folder(const fs::path& dir, const nlohmann::json& fingerprin
                      " now); its results are not mixed with this run's: choose another --out or "
                      "delete that folder");
   }
-  fs::create_directories(marker.parent_path());
   datasets::write_file_atomically(marker, fingerprint.dump(2) + "\n");
 }
 
