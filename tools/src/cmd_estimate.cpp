@@ -32,7 +32,7 @@ namespace {
 
 constexpr const char* kEstimatesHeader =
     "split,scene_id,im_id,gt_id,obj_id,label,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,"
-    "confident,err_cm,init_err_cm,ess_min,time_ms";
+    "confident,err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,ess_min,time_ms";
 constexpr const char* kBopHeader = "scene_id,im_id,obj_id,score,R,t,time";
 
 struct EstimateArguments {
@@ -97,9 +97,11 @@ class EstimateWorker {
         for (int a = 0; a < 3; ++a) row.add(format_general(1e4 * object.variance[a], 6));
         row.add(object.confident ? "1" : "0");
         row.add(100 * *object.error_m, 4).add(100 * *object.initial_error_m, 4);
+        for (int a = 0; a < 3; ++a) row.add(100 * (*object.error_support_m)[a], 4);
+        row.add(format_general(*object.nees, 6));
         row.add(object.effective_sample_size, 2);
       } else {
-        for (int column = 0; column < 10; ++column) row.add("");  // x_mm .. ess_min
+        for (int column = 0; column < 14; ++column) row.add("");  // x_mm .. ess_min
       }
       if (arguments_.no_time) {
         row.add("");

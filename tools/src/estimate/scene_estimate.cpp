@@ -535,6 +535,8 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
     object.variance = fused.variance;
     object.confident = fused.confident;
     object.error_m = (object.position - truth).norm();
+    object.error_support_m = fused.mean - position[object.gt_id];
+    object.nees = (object.error_support_m->array().square() / object.variance.array()).sum();
     object.model_translation = object.position - object.rotation * object.model_centre;
     if (options.keep_history) {
       for (const auto& iteration : nbp.history) {

@@ -89,6 +89,11 @@ struct ObjectEstimate {
   Eigen::Vector3d variance = Eigen::Vector3d::Zero();  // per support-frame axis, metres^2
   bool confident = false;
   std::optional<double> error_m, initial_error_m;  // vs the GT centre
+  // Estimate minus GT centre per support-frame axis (the axes of `variance`), metres, and the
+  // normalised estimation error squared sum_a error_a^2 / variance_a (chi-square with 3 degrees
+  // of freedom when the variance is honest).
+  std::optional<Eigen::Vector3d> error_support_m;
+  std::optional<double> nees;
   double effective_sample_size = 0;                // of the final belief's weights
   // Eq. 10 visibility of the GT instance (visible / silhouette pixels), for evaluation only.
   std::optional<double> visibility;
