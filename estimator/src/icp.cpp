@@ -1,5 +1,6 @@
 #include "clutterscope/estimator/icp.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <nanoflann.hpp>
@@ -108,6 +109,7 @@ IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::V
     // directions constrained by surfaces converge in a few steps and the others (constrained
     // only by edges) still move.
     Eigen::Matrix3d normal_matrix = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
     Eigen::Vector3d residual_sum = Eigen::Vector3d::Zero();
     double squared_sum = 0;
     int count = 0;
@@ -134,6 +136,7 @@ IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::V
       const Eigen::Matrix3d a =
           tree_->normal_outer[nearest] + kPointToPointWeight * Eigen::Matrix3d::Identity();
       normal_matrix += a;
+      information += tree_->normal_outer[nearest];
       residual_sum += a * (query - tree_->cloud.points.col(nearest));
       squared_sum += distance_sq;
       ++count;
@@ -145,6 +148,7 @@ IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::V
       return result;
     }
     result.rms_distance = std::sqrt(squared_sum / count);
+    result.normal_information = information;
     const Eigen::Vector3d step = normal_matrix.ldlt().solve(residual_sum);
     result.position += step;
     if (step.norm() < options_.convergence_step) {
@@ -177,8 +181,25 @@ FusedEstimate fuse_fits(const std::vector<Eigen::Vector3d>& fits, double varianc
   for (int a = 0; a < k; ++a) estimate.mean += estimate.weights[a] * fits[a];
   for (int a = 0; a < k; ++a)
     estimate.variance += estimate.weights[a] * (fits[a] - estimate.mean).cwiseAbs2();
+  for (int a = 0; a < k; ++a) {
+    const Eigen::Vector3d offset = fits[a] - estimate.mean;
+    estimate.covariance += estimate.weights[a] * offset * offset.transpose();
+  }
   estimate.confident = (estimate.variance.array() <= variance_threshold).all();
   return estimate;
+}
+
+Eigen::Matrix3d fused_covariance(const Eigen::Matrix3d& fit_spread,
+                                 const Eigen::Matrix3d& fit_information,
+                                 const Eigen::Matrix3d& belief_covariance) {
+  const Eigen::LLT<Eigen::Matrix3d> belief(belief_covariance);
+  if (belief.info() != Eigen::Success || !belief_covariance.allFinite())
+    throw std::invalid_argument("belief covariance is not positive definite");
+  const Eigen::Matrix3d precision = belief.solve(Eigen::Matrix3d::Identity()) +
+                                    0.5 * (fit_information + fit_information.transpose());
+  Eigen::Matrix3d noise = precision.ldlt().solve(Eigen::Matrix3d::Identity());
+  noise = 0.5 * (noise + noise.transpose());
+  return fit_spread + noise;
 }
 
 }  // namespace clutterscope::estimator

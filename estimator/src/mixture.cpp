@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 #include "sampling.hpp"
 
@@ -158,6 +159,35 @@ bool normalise_log_weights(const Eigen::VectorXd& log_weights, Eigen::VectorXd* 
 double effective_sample_size(const Eigen::VectorXd& weights) {
   const double sum_squares = weights.squaredNorm();
   return sum_squares > 0 ? 1.0 / sum_squares : 0.0;
+}
+
+double tempering_exponent(const Eigen::VectorXd& base, const Eigen::VectorXd& tempered,
+                          double min_fraction) {
+  if (base.size() != tempered.size())
+    throw std::invalid_argument("tempering: base and tempered log-weights differ in size");
+  Eigen::VectorXd prior;
+  normalise_log_weights(base, &prior);
+  const auto fraction_at = [&](double beta) {
+    double top = -std::numeric_limits<double>::infinity();
+    for (Eigen::Index i = 0; i < base.size(); ++i)
+      if (prior[i] > 0 && std::isfinite(tempered[i])) top = std::max(top, beta * tempered[i]);
+    if (!std::isfinite(top)) return 1.0;  // nothing the likelihood can reweight
+    double sum = 0, sum_squares = 0;
+    for (Eigen::Index i = 0; i < base.size(); ++i) {
+      if (!(prior[i] > 0) || !std::isfinite(tempered[i])) continue;  // -inf: weight 0 at any beta
+      const double e = std::exp(beta * tempered[i] - top);
+      sum += prior[i] * e;
+      sum_squares += prior[i] * e * e;
+    }
+    return sum_squares > 0 ? sum * sum / sum_squares : 0.0;
+  };
+  if (fraction_at(1.0) >= min_fraction) return 1.0;
+  double low = 0.0, high = 1.0;  // fraction(low) >= min_fraction > fraction(high)
+  while (high - low > 1e-4) {
+    const double middle = 0.5 * (low + high);
+    (fraction_at(middle) >= min_fraction ? low : high) = middle;
+  }
+  return low;
 }
 
 std::vector<int> systematic_resample(const Eigen::VectorXd& weights, int count,

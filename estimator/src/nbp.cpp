@@ -44,6 +44,17 @@ struct Task {
   bool from_initial = false;
 };
 
+// Appends `source` scaled by `share` to `mixture` (per-component variances).
+void append_components(const GaussianMixture& source, double share, GaussianMixture* mixture) {
+  const int d = source.dimension(), old_size = mixture->size(), m = source.size();
+  mixture->means.conservativeResize(d, old_size + m);
+  mixture->weights.conservativeResize(old_size + m);
+  mixture->variances.conservativeResize(d, old_size + m);
+  mixture->means.middleCols(old_size, m) = source.means;
+  mixture->weights.segment(old_size, m) = share * source.weights;
+  for (int i = 0; i < m; ++i) mixture->variances.col(old_size + i) = source.component_variances(i);
+}
+
 }  // namespace
 
 void PairwisePotential::sample(EdgeDirection, const Eigen::MatrixXd&, std::mt19937_64&,
@@ -134,6 +145,11 @@ bool NbpOptions::IsValid(std::string* why) const {
   if (belief_samples < 0)
     return fail("belief_samples must be >= 0, got " + std::to_string(belief_samples));
   if (!(min_bandwidth_variance > 0)) return fail("min_bandwidth_variance must be > 0");
+  if (!(min_effective_sample_fraction >= 0) || !(min_effective_sample_fraction <= 1))
+    return fail("min_effective_sample_fraction must be in [0, 1]");
+  if (!(proposal_min_variance > 0)) return fail("proposal_min_variance must be > 0");
+  if (!(defensive_fraction > 0) || !(defensive_fraction < 1))
+    return fail("defensive_fraction must be in (0, 1)");
   if (pointwise_neighbour_samples < 1)
     return fail("pointwise_neighbour_samples must be >= 1, got " +
                 std::to_string(pointwise_neighbour_samples));
@@ -218,6 +234,7 @@ NbpResult run_nbp(const PairwiseMrf& mrf, const NbpOptions& options, std::mt1993
   std::vector<std::array<GaussianMixture, 2>> next_messages(mrf.edges.size());
   std::vector<BeliefSamples> next_beliefs(n);
   std::vector<uint64_t> seeds(n);
+  std::vector<double> temperatures(n, 1.0);
   Eigen::VectorXd unary_values, factor_values, neighbour_weights;
   Eigen::MatrixXd subsample;
   for (int iteration = 0; iteration < options.iterations; ++iteration) {
@@ -263,7 +280,28 @@ NbpResult run_nbp(const PairwiseMrf& mrf, const NbpOptions& options, std::mt1993
           if (incs[k].sampled && k != task.exclude)
             inputs.push_back(&messages[incs[k].edge][slot(reverse(incs[k].outgoing))]);
         auto block = batch.middleCols(task.offset, task.count);
-        if (inputs.empty()) {
+        if (task.exclude == -1 && options.adaptive_belief_proposal && iteration > 0) {
+          // Previous belief as a kernel density, mixed with the initial mixture and the
+          // incoming messages; weights: product of the inputs / proposal.
+          GaussianMixture proposal;
+          proposal.means.resize(d, 0);
+          GaussianMixture previous;
+          previous.means = beliefs[t].points;
+          normalise_log_weights(beliefs[t].log_weights, &previous.weights);
+          previous.variances = rule_of_thumb_bandwidth(previous.means, previous.weights,
+                                                       options.proposal_min_variance);
+          const int message_count = static_cast<int>(inputs.size()) - (node.unary_mixture ? 1 : 0);
+          const double defensive = options.defensive_fraction;
+          append_components(previous, 1 - defensive, &proposal);
+          append_components(node.initial, message_count > 0 ? defensive / 2 : defensive, &proposal);
+          for (std::size_t j = node.unary_mixture ? 1 : 0; j < inputs.size(); ++j)
+            append_components(*inputs[j], defensive / 2 / message_count, &proposal);
+          proposal.weights /= proposal.weights.sum();
+          block = sample_mixture(proposal, task.count, node_rng);
+          Eigen::VectorXd log_target = Eigen::VectorXd::Zero(task.count);
+          for (const GaussianMixture* input : inputs) log_target += log_evaluate(*input, block);
+          log_weights.segment(task.offset, task.count) = log_target - log_evaluate(proposal, block);
+        } else if (inputs.empty()) {
           task.from_initial = true;
           block = sample_mixture(node.initial, task.count, node_rng);
           log_weights.segment(task.offset, task.count) = -log_evaluate(node.initial, block);
@@ -273,7 +311,9 @@ NbpResult run_nbp(const PairwiseMrf& mrf, const NbpOptions& options, std::mt1993
         ++summary.products_sampled;
       }
       summary.time_products += Clock::now() - product_start;
-      // 2. Pointwise unary for the whole batch, then pointwise pairwise factors.
+      // 2. Pointwise unary for the whole batch, then pointwise pairwise factors, summed in
+      // factor_log (tempered below); log_weights keeps the proposal corrections.
+      Eigen::VectorXd factor_log = Eigen::VectorXd::Zero(total);
       if (node.unary) {
         const auto unary_start = Clock::now();
         node.unary->evaluate(batch, &unary_values);
@@ -281,7 +321,7 @@ NbpResult run_nbp(const PairwiseMrf& mrf, const NbpOptions& options, std::mt1993
         summary.unary_points_scored += total;
         if (unary_values.size() != total)
           throw std::logic_error("pointwise unary returned the wrong number of values");
-        log_weights += unary_values;
+        factor_log += unary_values;
       }
       const auto pairwise_start = Clock::now();
       BeliefSamples& belief = next_beliefs[t];
@@ -310,9 +350,19 @@ NbpResult run_nbp(const PairwiseMrf& mrf, const NbpOptions& options, std::mt1993
         }
         mrf.edges[incs[k].edge].potential->log_factor(
             reverse(incs[k].outgoing), batch, *neighbour_points, neighbour_weights, &factor_values);
-        log_weights += factor_values;
+        factor_log += factor_values;
         belief.factor_logs[k] = factor_values.tail(t_samples);
       }
+      double beta = 1.0;
+      if (options.min_effective_sample_fraction > 0)
+        beta = tempering_exponent(log_weights.tail(t_samples), factor_log.tail(t_samples),
+                                  options.min_effective_sample_fraction);
+      for (Eigen::Index i = 0; i < total; ++i)
+        if (beta > 0 || std::isfinite(factor_log[i])) log_weights[i] += beta * factor_log[i];
+      for (Eigen::VectorXd& logs : belief.factor_logs)
+        if (logs.size() > 0)
+          logs = beta > 0 ? Eigen::VectorXd(beta * logs) : Eigen::VectorXd::Zero(logs.size());
+      temperatures[t] = beta;
       // 3. Normalise each task's weights and push the samples through the potentials.
       Eigen::VectorXd weights, message_weights;
       for (const Task& task : tasks) {
@@ -370,7 +420,10 @@ NbpResult run_nbp(const PairwiseMrf& mrf, const NbpOptions& options, std::mt1993
                       rule_of_thumb_bandwidth(g.means, g.weights, options.min_bandwidth_variance));
       }
       if (options.keep_history) result.history.push_back(snapshot);
-      if (last) result.beliefs = std::move(snapshot);
+      if (last) {
+        result.beliefs = std::move(snapshot);
+        result.temperatures = temperatures;
+      }
     }
   }
   if (!std::isfinite(summary.min_effective_sample_size)) summary.min_effective_sample_size = 0;

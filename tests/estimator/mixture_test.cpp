@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 namespace clutterscope::estimator {
@@ -120,6 +121,43 @@ TEST(Mixture, SystematicResampleKeepsProportions) {
   EXPECT_EQ(counts[1], 2);
   EXPECT_EQ(counts[2], 0);
   EXPECT_EQ(counts[3], 2);
+}
+
+TEST(Mixture, TemperingKeepsTheConditionalSampleSizeOfAGaussianLikelihood) {
+  // x ~ N(0, 1), log-likelihood u = -a x^2: E[e^{beta u}]^2 / E[e^{2 beta u}] is
+  // sqrt(1 + 4 a beta) / (1 + 2 a beta) in closed form. With N = 20000 samples the sample
+  // fraction is within a few 1 / sqrt(N) of it.
+  std::mt19937_64 rng(17);
+  std::normal_distribution<double> normal;
+  const int n = 20000;
+  const double a = 50;  // untempered: fraction 0.14
+  Eigen::VectorXd x(n), u(n);
+  for (int i = 0; i < n; ++i) {
+    x[i] = normal(rng);
+    u[i] = -a * x[i] * x[i];
+  }
+  const auto closed_form = [&](double beta) {
+    return std::sqrt(1 + 4 * a * beta) / (1 + 2 * a * beta);
+  };
+  const Eigen::VectorXd base = Eigen::VectorXd::Zero(n);
+  for (const double target : {0.3, 0.5, 0.8}) {
+    const double beta = tempering_exponent(base, u, target);
+    EXPECT_GT(beta, 0);
+    EXPECT_LT(beta, 1);
+    EXPECT_NEAR(closed_form(beta), target, 0.02) << "target " << target;
+  }
+  EXPECT_EQ(tempering_exponent(base, u, 0.1), 1.0);  // untempered already keeps 0.14
+  // A proposal correction in base is not tempered: the same likelihood over importance
+  // weights that already favour half of the samples keeps the same conditional fraction.
+  Eigen::VectorXd tilted = base;
+  for (int i = 0; i < n; ++i) tilted[i] = x[i] > 0 ? 0.0 : -1.0;
+  const double beta = tempering_exponent(tilted, u, 0.5);
+  EXPECT_NEAR(closed_form(beta), 0.5, 0.03);
+  // -inf likelihood terms stay impossible; sizes must agree.
+  Eigen::VectorXd impossible = u;
+  impossible[0] = -std::numeric_limits<double>::infinity();
+  EXPECT_GT(tempering_exponent(base, impossible, 0.5), 0);
+  EXPECT_THROW(tempering_exponent(base, Eigen::VectorXd::Zero(3), 0.5), std::invalid_argument);
 }
 
 }  // namespace

@@ -383,6 +383,17 @@ void add_estimate_command(CLI::App& app, int* exit_code) {
       "--bandwidth-floor-mm", [&e](double mm) { e.min_bandwidth_m = 1e-3 * mm; },
       "floor of the kernel standard deviation of messages and beliefs (mm, default 5)");
   command
+      ->add_option("--correlated-pixels", e.correlated_pixels,
+                   "calibrated covariance: the ICP fit's depth noise counts as independent once "
+                   "per this many matched pixels (>= 1; larger: wider variances)")
+      ->capture_default_str();
+  command
+      ->add_option("--min-ess-fraction", e.min_effective_sample_fraction,
+                   "adaptive tempering: the unary and non-contact factors of a node are raised to "
+                   "the largest power <= 1 that keeps its belief's effective sample size >= this "
+                   "fraction of the particles (0 = off, the paper's untempered weights)")
+      ->capture_default_str();
+  command
       ->add_option("--grid-pixels", e.grid_pixels,
                    "scoring grid: the longer side of a detection box in grid pixels")
       ->capture_default_str();

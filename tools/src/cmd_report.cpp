@@ -45,6 +45,7 @@ const std::vector<StepOption>& step_options() {
       {"estimate", "--proxy-tolerance-mm", false,
        "estimate: surface tolerance of the scoring models"},
       {"estimate", "--bandwidth-floor-mm", false, "estimate: floor of the kernel bandwidth"},
+      {"estimate", "--min-ess-fraction", false, "estimate: adaptive tempering of the weights"},
       {"estimate", "--icp-max-distance-mm", false, "estimate: ICP correspondence distance"},
       {"estimate", "--save-beliefs", true,
        "estimate: also write the belief samples of every iteration"},

@@ -202,6 +202,11 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (!(proxy_tolerance_m >= 0) || !std::isfinite(proxy_tolerance_m))
     return fail("proxy tolerance must be a finite number >= 0");
   if (!(icp_max_distance_m > 0)) return fail("ICP correspondence distance must be > 0");
+  if (!(min_effective_sample_fraction >= 0) || !(min_effective_sample_fraction <= 1))
+    return fail("--min-ess-fraction must be in [0, 1]");
+  if (!(correlated_pixels >= 1) || !std::isfinite(correlated_pixels))
+    return fail("--correlated-pixels must be a finite number >= 1");
+  if (!(min_residual_m > 0)) return fail("the residual floor must be > 0");
   if (!(support_z_sigma_m > 0) || !(non_contact_floor > 0) || !(min_bandwidth_m > 0))
     return fail("support sigma, non-contact floor and bandwidth floor must be > 0");
   return depth.IsValid(why);
@@ -481,6 +486,10 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
     nbp_options.gibbs_sweeps = options.gibbs_sweeps;
     nbp_options.min_bandwidth_variance = min_variance;
     nbp_options.keep_history = options.keep_history;
+    nbp_options.min_effective_sample_fraction = options.min_effective_sample_fraction;
+    nbp_options.adaptive_belief_proposal = options.adaptive_belief_proposal;
+    nbp_options.proposal_min_variance =
+        options.proposal_min_bandwidth_m * options.proposal_min_bandwidth_m;
     try {
       nbp = estimator::run_nbp(mrf, nbp_options, rng);
       result.nbp = nbp.summary;
@@ -518,10 +527,12 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
     const auto [observed, normals] = observed_points(*object.observation, kIcpObservedPoints);
     const Eigen::MatrixXd starts = estimator::sample_mixture(belief, options.icp_samples, rng);
     std::vector<Eigen::Vector3d> fits;
+    std::vector<estimator::IcpResult> fit_results;
     for (int k = 0; k < starts.cols(); ++k) {
       const Eigen::Vector3d start_camera = support_to_camera * Eigen::Vector3d(starts.col(k));
+      fit_results.push_back(icp.align(observed, start_camera, &normals));
       // Fits in the support frame, so that variances are per support-frame axis.
-      fits.push_back(camera_to_support * icp.align(observed, start_camera, &normals).position);
+      fits.push_back(camera_to_support * fit_results.back().position);
     }
     estimator::FusedEstimate fused;
     try {
@@ -531,9 +542,36 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
       object.initial_error_m.reset();
       continue;
     }
+    // The fits' information per unit residual variance and the residual variance, averaged
+    // with the fusion weights, in the support frame; the belief's spread bounds what the fits
+    // cannot see.
+    Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+    double residual_variance = 0;
+    for (std::size_t k = 0; k < fit_results.size(); ++k) {
+      information +=
+          fused.weights[static_cast<Eigen::Index>(k)] * fit_results[k].normal_information;
+      residual_variance += fused.weights[static_cast<Eigen::Index>(k)] *
+                           fit_results[k].rms_distance * fit_results[k].rms_distance;
+    }
+    const Eigen::Matrix3d to_support = camera_to_support.linear();
+    const double noise_variance =
+        std::max(residual_variance, options.min_residual_m * options.min_residual_m);
+    information = to_support * information * to_support.transpose() /
+                  (options.correlated_pixels * noise_variance);
+    const double belief_floor = options.proposal_min_bandwidth_m * options.proposal_min_bandwidth_m;
+    Eigen::Matrix3d belief_covariance = belief_floor * Eigen::Matrix3d::Identity();
+    {
+      const Eigen::Vector3d mean = belief.means * belief.weights;
+      for (int c = 0; c < belief.size(); ++c) {
+        const Eigen::Vector3d offset = Eigen::Vector3d(belief.means.col(c)) - mean;
+        belief_covariance += belief.weights[c] * offset * offset.transpose();
+      }
+    }
+    const Eigen::Matrix3d covariance =
+        estimator::fused_covariance(fused.covariance, information, belief_covariance);
     object.position = support_to_camera * fused.mean;
-    object.variance = fused.variance;
-    object.confident = fused.confident;
+    object.variance = covariance.diagonal();
+    object.confident = (object.variance.array() <= threshold_m2).all();
     object.error_m = (object.position - truth).norm();
     object.error_support_m = fused.mean - position[object.gt_id];
     object.nees = (object.error_support_m->array().square() / object.variance.array()).sum();

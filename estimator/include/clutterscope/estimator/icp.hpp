@@ -36,6 +36,10 @@ struct IcpResult {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // the refined object position
   double rms_distance = 0;                             // over the final correspondences
   int correspondences = 0;
+  // sum of n n^T over the final correspondences (model normals, the frame of the points): the
+  // point-to-plane fit's information about the position per unit residual variance. Directions
+  // no matched surface faces (a cylinder seen from the side, along its axis) have none.
+  Eigen::Matrix3d normal_information = Eigen::Matrix3d::Zero();
   int iterations = 0;
   bool converged = false;  // step below convergence_step with enough correspondences
 };
@@ -67,8 +71,9 @@ class TranslationIcp {
 
 struct FusedEstimate {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  Eigen::Vector3d variance = Eigen::Vector3d::Zero();  // weighted, per axis (metres^2)
-  Eigen::VectorXd weights;                             // one per fit, sum 1
+  Eigen::Vector3d variance = Eigen::Vector3d::Zero();    // weighted, per axis (metres^2)
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // weighted spread (variance: diagonal)
+  Eigen::VectorXd weights;                               // one per fit, sum 1
   bool confident = false;
 };
 
@@ -78,5 +83,16 @@ struct FusedEstimate {
 // 2.5e-5 = 0.25 cm^2 in the paper). Throws std::invalid_argument for no fits, non-finite fits
 // or a threshold <= 0.
 FusedEstimate fuse_fits(const std::vector<Eigen::Vector3d>& fits, double variance_threshold);
+
+// The covariance of an estimate refined by ICP from belief samples, so that it covers the error
+// it claims: the spread of the fits (basins the belief reaches) plus the fit's own noise,
+// (B^-1 + J)^-1, where J = H / (c sigma^2) is the fit's information (H: normal_information,
+// sigma^2 the residual variance, c >= 1 the number of neighbouring pixels whose noise is one:
+// depth errors are correlated, not independent per pixel) and B the belief's covariance, which
+// bounds the directions the fit cannot see. Symmetric positive definite for B positive
+// definite. Throws std::invalid_argument for a non-positive-definite B.
+Eigen::Matrix3d fused_covariance(const Eigen::Matrix3d& fit_spread,
+                                 const Eigen::Matrix3d& fit_information,
+                                 const Eigen::Matrix3d& belief_covariance);
 
 }  // namespace clutterscope::estimator

@@ -56,6 +56,15 @@ bool normalise_log_weights(const Eigen::VectorXd& log_weights, Eigen::VectorXd* 
 // Kish's effective sample size 1 / sum w_i^2 of normalised weights (M for equal weights).
 double effective_sample_size(const Eigen::VectorXd& weights);
 
+// Adaptive tempering of importance weights w_i ∝ W_i exp(beta u_i) (W: normalised weights
+// from exp(base), u: the tempered log-likelihood terms): the largest beta in [0, 1] whose
+// conditional effective sample size fraction (sum_i W_i e_i)^2 / sum_i W_i e_i^2, e_i =
+// exp(beta u_i), is at least min_fraction (Zhou, Johansen & Aston 2016). It measures only the
+// degeneracy the likelihood adds, so a proposal that already mismatches the prior does not
+// drive beta to 0. Found by bisection to 1e-4; 1 when the untempered weights satisfy it.
+double tempering_exponent(const Eigen::VectorXd& base, const Eigen::VectorXd& tempered,
+                          double min_fraction);
+
 // Systematic resampling: `count` indices drawn in proportion to normalised `weights`.
 std::vector<int> systematic_resample(const Eigen::VectorXd& weights, int count,
                                      std::mt19937_64& rng);

@@ -43,10 +43,10 @@ std::string to_string(Observation observation);  // "measured", "synthetic"
 struct EstimateOptions {
   Observation observation = Observation::kMeasured;
   datasets::DepthCheckOptions depth;  // measured observations: --depth-scale, --no-depth-check
-  int particles = 100;   // M
-  int iterations = 15;   // NBP iterations
-  int gibbs_sweeps = 5;  // kappa
-  int icp_samples = 20;  // K belief samples refined by ICP
+  int particles = 100;                // M
+  int iterations = 15;                // NBP iterations
+  int gibbs_sweeps = 5;               // kappa
+  int icp_samples = 20;               // K belief samples refined by ICP
   double variance_threshold_cm2 = 0.25;
   std::uint64_t seed = 1;
   bool keep_history = false;  // belief samples of every iteration (--save-beliefs)
@@ -65,8 +65,18 @@ struct EstimateOptions {
   // 2 or 3 cm, even with back-face culling and normal checks, the fits of cans slid together onto
   // their neighbours, 2-3 cm off).
   double icp_max_distance_m = 0.01;
+  // Calibrated covariance (estimator::fused_covariance): depth noise is correlated over about
+  // this many pixels of a fit, and the fit's residual is taken at least min_residual_m.
+  double correlated_pixels = 20;
+  double min_residual_m = 0.0005;
   double support_z_sigma_m = 0.003;
   double non_contact_floor = 1e-3;
+  // NBP's adaptive tempering (estimator::NbpOptions::min_effective_sample_fraction).
+  double min_effective_sample_fraction = 0.0;
+  // NBP's adaptive belief proposal and the floor of its kernel standard deviation, finer than
+  // min_bandwidth_m so that beliefs can become as sharp as the unary.
+  bool adaptive_belief_proposal = true;
+  double proposal_min_bandwidth_m = 0.0005;
   double min_bandwidth_m =
       0.005;  // floor of the kernel standard deviation: keeps the K ICP starts apart
   bool IsValid(std::string* why) const;
@@ -94,7 +104,7 @@ struct ObjectEstimate {
   // of freedom when the variance is honest).
   std::optional<Eigen::Vector3d> error_support_m;
   std::optional<double> nees;
-  double effective_sample_size = 0;                // of the final belief's weights
+  double effective_sample_size = 0;  // of the final belief's weights
   // Eq. 10 visibility of the GT instance (visible / silhouette pixels), for evaluation only.
   std::optional<double> visibility;
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();       // model to camera (from the GT)
