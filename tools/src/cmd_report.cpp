@@ -106,6 +106,12 @@ void add_report_command(CLI::App& app, int* exit_code) {
                    "confident iff every axis variance is <= this (cm^2); also the estimator's")
       ->capture_default_str();
   command
+      ->add_option_function<double>(
+          "--confidence-radius-cm", [&analysis](double cm) { analysis.confidence_radius_cm = cm; },
+          "also the calibrated decision: confident iff the 95% ellipsoid fits in a sphere of this "
+          "radius (cm); shown beside the variance threshold; also the estimator's")
+      ->type_name("R");
+  command
       ->add_option("--visibility-cutoff", analysis.visibility_cutoff,
                    "objects below this visibility fraction count as barely visible")
       ->capture_default_str();
