@@ -46,8 +46,8 @@ TEST(ReportCalibration, QuantilesInvertTheCdf) {
 TEST(ReportCalibration, CoverageOfHandMadeValues) {
   // 2.0 <= 2.366 (50%); 5.0 and 6.25 <= 6.2514 (90%); 7.8 <= 7.8147 (95%); 11 <= 11.345 (99%);
   // 20 outside all; inf and empty are missing.
-  const Coverage c = coverage({2.0, 5.0, 6.25, 7.8, 11.0, 20.0,
-                               std::numeric_limits<double>::infinity(), std::nullopt});
+  const Coverage c = coverage(
+      {2.0, 5.0, 6.25, 7.8, 11.0, 20.0, std::numeric_limits<double>::infinity(), std::nullopt});
   EXPECT_EQ(c.count, 8);
   EXPECT_EQ(c.nees_missing, 2);
   EXPECT_DOUBLE_EQ(*c.observed[0].value, 1.0 / 6);

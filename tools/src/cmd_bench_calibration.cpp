@@ -182,7 +182,8 @@ void print_line(const std::string& label, const std::vector<const CalibrationRow
       confident_errors.push_back(100 * *object.error_m);
       confident_over_2cm += 100 * *object.error_m > 2.0;
     }
-    if (radius_cm) confident_radius += report::confident_within_radius(max_variance_cm2(object), *radius_cm);
+    if (radius_cm)
+      confident_radius += report::confident_within_radius(max_variance_cm2(object), *radius_cm);
   }
   const report::Coverage coverage = report::coverage(nees);
   const report::EssQuantiles quantiles = report::ess_quantiles(ess);
@@ -196,15 +197,14 @@ void print_line(const std::string& label, const std::vector<const CalibrationRow
               cell(quantiles.p90, "%.1f").c_str(), cell(report::mean(errors), "%.3f").c_str(),
               confident_errors.size(), cell(report::mean(confident_errors), "%.3f").c_str(),
               share_cell(confident_over_2cm, static_cast<long>(confident_errors.size())).c_str(),
-              share_cell(static_cast<long>(confident_errors.size()),
-                         static_cast<long>(rows.size()))
+              share_cell(static_cast<long>(confident_errors.size()), static_cast<long>(rows.size()))
                   .c_str());
   if (radius_cm) std::printf(" %7ld", confident_radius);
   std::printf("\n");
 }
 
-void print_table(const std::vector<CalibrationRow>& rows, const BenchCalibrationArguments& arguments,
-                 const std::string& source) {
+void print_table(const std::vector<CalibrationRow>& rows,
+                 const BenchCalibrationArguments& arguments, const std::string& source) {
   std::vector<const CalibrationRow*> all;
   std::vector<std::vector<const CalibrationRow*>> bands(report::kCalibrationBands);
   std::vector<const CalibrationRow*> confident;
@@ -235,10 +235,9 @@ void print_table(const std::vector<CalibrationRow>& rows, const BenchCalibration
   std::printf(
       "coverage: share of estimates with NEES = sum err_a^2/var_a (support frame) <= "
       "chi2_3(p), over those with a finite NEES (no_nees: a zero variance)\n\n");
-  std::printf(
-      "%-9s %6s %6s %6s %6s %6s %9s %7s %6s %6s %6s %8s %5s %8s %8s %7s",
-      "band", "count", "cov50", "cov90", "cov95", "cov99", "nees_med", "no_nees", "ess10",
-      "ess50", "ess90", "err_cm", "conf", "conf_err", "conf>2cm", "conf_sh");
+  std::printf("%-9s %6s %6s %6s %6s %6s %9s %7s %6s %6s %6s %8s %5s %8s %8s %7s", "band", "count",
+              "cov50", "cov90", "cov95", "cov99", "nees_med", "no_nees", "ess10", "ess50", "ess90",
+              "err_cm", "conf", "conf_err", "conf>2cm", "conf_sh");
   if (e.confidence_radius_cm) std::printf(" %7s", "conf_R");
   std::printf("\n");
   for (int band = 0; band < report::kCalibrationBands; ++band) {
@@ -261,7 +260,8 @@ std::string optional_text(const std::optional<double>& value, int significant) {
   return value ? format_general(*value, significant) : std::string();
 }
 
-void write_csv(const std::vector<CalibrationRow>& rows, const BenchCalibrationArguments& arguments) {
+void write_csv(const std::vector<CalibrationRow>& rows,
+               const BenchCalibrationArguments& arguments) {
   std::string text =
       "dataset,split,scene_id,im_id,gt_id,obj_id,visib_fract,err_cm,err_x_cm,err_y_cm,err_z_cm,"
       "var_x_cm2,var_y_cm2,var_z_cm2,nees,radius95_cm,confident,confident_radius,ess_min,"
@@ -279,9 +279,9 @@ void write_csv(const std::vector<CalibrationRow>& rows, const BenchCalibrationAr
       line.add(optional_text(nees_of(object), 6));
       line.add(format_general(report::radius95_cm(max_variance_cm2(object)), 6));
       line.add(object.confident ? "1" : "0");
-      line.add(!radius ? ""
+      line.add(!radius                                                              ? ""
                : report::confident_within_radius(max_variance_cm2(object), *radius) ? "1"
-                                                                                     : "0");
+                                                                                    : "0");
       line.add(object.effective_sample_size, 2);
       line.add("");
     } else {
@@ -298,9 +298,9 @@ void run_bench(BenchCalibrationArguments arguments) {
   if (!arguments.estimate.IsValid(&why)) throw UsageError(why);
   if (arguments.scenes < 1) throw UsageError("--scenes must be >= 1");
   if (arguments.hidden < 0) throw UsageError("--hidden must be >= 0");
-  const int jobs =
-      arguments.jobs > 0 ? arguments.jobs
-                         : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int jobs = arguments.jobs > 0
+                       ? arguments.jobs
+                       : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   std::optional<TemporaryFolder> generated;
   std::vector<fs::path> sets;
   std::string source;
@@ -309,16 +309,15 @@ void run_bench(BenchCalibrationArguments arguments) {
     sets = generate_sets(arguments, generated->path());
     source = "generated tray, shelf and pile scenes (" + std::to_string(arguments.scenes) +
              " each, seed " + std::to_string(arguments.seed) + ", " +
-             std::to_string(arguments.objects) +
-             " objects, " + std::to_string(arguments.hidden) + " hidden)";
+             std::to_string(arguments.objects) + " objects, " + std::to_string(arguments.hidden) +
+             " hidden)";
   } else {
     for (const std::string& dataset : arguments.datasets) sets.push_back(dataset);
     source = std::to_string(sets.size()) + " dataset" + (sets.size() > 1 ? "s" : "");
   }
   std::vector<CalibrationRow> rows;
   for (const fs::path& set : sets) {
-    const std::string name =
-        arguments.datasets.empty() ? set.filename().string() : set.string();
+    const std::string name = arguments.datasets.empty() ? set.filename().string() : set.string();
     std::vector<CalibrationRow> part = estimate_set(set, name, arguments, jobs);
     if (!arguments.quiet) {
       std::fprintf(stderr, "bench calibration: estimated %s: %zu objects\n", name.c_str(),

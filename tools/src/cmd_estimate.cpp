@@ -105,7 +105,7 @@ class EstimateWorker {
         const double max_variance_cm2 = 1e4 * object.variance.maxCoeff();
         row.add(format_general(report::radius95_cm(max_variance_cm2), 6));
         const auto& radius = arguments_.estimate.confidence_radius_cm;
-        row.add(!radius ? ""
+        row.add(!radius                                                      ? ""
                 : report::confident_within_radius(max_variance_cm2, *radius) ? "1"
                                                                              : "0");
         row.add(object.effective_sample_size, 2);
@@ -398,7 +398,7 @@ void add_estimator_options(CLI::App& command, EstimateOptions& e) {
   add_nbp_options(command, e);
   command
       .add_option("--variance-threshold-cm2", e.variance_threshold_cm2,
-                   "confident iff every axis variance of the fused fits is <= this (cm^2, > 0)")
+                  "confident iff every axis variance of the fused fits is <= this (cm^2, > 0)")
       ->capture_default_str();
   command
       .add_option_function<double>(
@@ -410,7 +410,7 @@ void add_estimator_options(CLI::App& command, EstimateOptions& e) {
       ->type_name("R");
   command
       .add_option("--unary-lambda", e.unary_lambda,
-                   "lambda_r of Eq. 6 per metre of summed pixel distance (< 0)")
+                  "lambda_r of Eq. 6 per metre of summed pixel distance (< 0)")
       ->capture_default_str();
   command.add_option_function<double>(
       "--unary-truncation-mm", [&e](double mm) { e.unary_truncation_m = 1e-3 * mm; },
@@ -420,11 +420,11 @@ void add_estimator_options(CLI::App& command, EstimateOptions& e) {
       "floor of the kernel standard deviation of messages and beliefs (mm, default 5)");
   command
       .add_option("--grid-pixels", e.grid_pixels,
-                   "scoring grid: the longer side of a detection box in grid pixels")
+                  "scoring grid: the longer side of a detection box in grid pixels")
       ->capture_default_str();
   command
       .add_option("--proxy-triangles", e.proxy_triangles,
-                   "triangles of the decimated models rendered for the unary (at most)")
+                  "triangles of the decimated models rendered for the unary (at most)")
       ->capture_default_str();
   command.add_option_function<double>(
       "--proxy-tolerance-mm", [&e](double mm) { e.proxy_tolerance_m = 1e-3 * mm; },

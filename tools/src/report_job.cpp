@@ -201,9 +201,8 @@ void append_estimate_options(const ReportArguments& arguments, std::vector<std::
                              report::format_number(arguments.analysis.variance_threshold_cm2),
                              "--seed", std::to_string(arguments.analysis.seed)});
   if (arguments.analysis.confidence_radius_cm) {
-    line->insert(line->end(),
-                 {"--confidence-radius-cm",
-                  report::format_number(*arguments.analysis.confidence_radius_cm)});
+    line->insert(line->end(), {"--confidence-radius-cm",
+                               report::format_number(*arguments.analysis.confidence_radius_cm)});
   }
 }
 

@@ -94,9 +94,9 @@ nlohmann::ordered_json coverage_json(const Coverage& coverage) {
 nlohmann::ordered_json ess_json(const EssQuantiles& ess) {
   nlohmann::ordered_json json, undefined = nlohmann::ordered_json::object();
   json["count"] = ess.count;
-  for (const auto& [name, statistic] :
-       {std::pair<const char*, const Statistic*>{"p10", &ess.p10}, {"p50", &ess.p50},
-        {"p90", &ess.p90}}) {
+  for (const auto& [name, statistic] : {std::pair<const char*, const Statistic*>{"p10", &ess.p10},
+                                        {"p50", &ess.p50},
+                                        {"p90", &ess.p90}}) {
     json[name] = json_of(*statistic);
     if (!statistic->defined()) undefined[name] = statistic->undefined_reason;
   }

@@ -78,10 +78,10 @@ std::string threshold_sweep_plot(const ThresholdAnalysis& analysis) {
 
 std::string calibration_plot(const Coverage& all, const Coverage& confident,
                              const std::optional<Coverage>& confident_radius) {
-  svg::Chart chart("Calibration: do the 3-D ellipsoids cover their share of errors?",
-                   {"nominal coverage p (ellipsoid NEES \u2264 \u03c7\u00b2\u2083(p), %)", false,
-                    0.0, 100.0},
-                   {"observed coverage (% of estimates)", false, 0.0, 100.0});
+  svg::Chart chart(
+      "Calibration: do the 3-D ellipsoids cover their share of errors?",
+      {"nominal coverage p (ellipsoid NEES \u2264 \u03c7\u00b2\u2083(p), %)", false, 0.0, 100.0},
+      {"observed coverage (% of estimates)", false, 0.0, 100.0});
   chart.add_line({0.0, 100.0}, {0.0, 100.0}, {120, 120, 120}, "honest (observed = nominal)", true);
   const auto series = [&chart](const Coverage& coverage, int colour, const std::string& name) {
     std::vector<double> x, y;

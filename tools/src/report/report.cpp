@@ -297,16 +297,16 @@ nlohmann::ordered_json summary_json(const ReportAnalysis& analysis, const Json& 
   json["schema_version"] = kSummarySchemaVersion;
   json["generator"] = std::string("clutterscope ") + CLUTTERSCOPE_VERSION;
   json["run"] = run.is_object() ? run : Json::object();
-  json["options"] = {{"accurate_cm", options.accurate_cm},
-                     {"variance_threshold_cm2", options.variance_threshold_cm2},
-                     {"visibility_cutoff", options.visibility_cutoff},
-                     {"min_precision", options.min_precision},
-                     {"confidence_radius_cm", options.confidence_radius_cm
-                                                  ? Json(*options.confidence_radius_cm)
-                                                  : Json(nullptr)},
-                     {"bootstrap_resamples", options.bootstrap.resamples},
-                     {"confidence", options.bootstrap.confidence},
-                     {"seed", options.seed}};
+  json["options"] = {
+      {"accurate_cm", options.accurate_cm},
+      {"variance_threshold_cm2", options.variance_threshold_cm2},
+      {"visibility_cutoff", options.visibility_cutoff},
+      {"min_precision", options.min_precision},
+      {"confidence_radius_cm",
+       options.confidence_radius_cm ? Json(*options.confidence_radius_cm) : Json(nullptr)},
+      {"bootstrap_resamples", options.bootstrap.resamples},
+      {"confidence", options.bootstrap.confidence},
+      {"seed", options.seed}};
   const ReportCounts& c = analysis.counts;
   json["counts"] = {{"objects", c.objects},
                     {"images", c.images},
@@ -705,8 +705,8 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
       << "<th>accepted</th><th>precision</th><th>recall</th><th>F1</th><th>accepted below "
       << fixed(100 * options.visibility_cutoff, 0) << "%</th></tr>\n";
   for (const RadiusRow& radius : t.radius_sweep) {
-    const bool chosen = options.confidence_radius_cm &&
-                        radius.radius_cm == *options.confidence_radius_cm;
+    const bool chosen =
+        options.confidence_radius_cm && radius.radius_cm == *options.confidence_radius_cm;
     out << "<tr" << (chosen ? " style=\"font-weight:bold\"" : "") << "><td>"
         << general(radius.radius_cm) << "</td><td>" << general(radius.row.threshold_cm2)
         << "</td><td>" << radius.row.accepted << "</td>" << cell(radius.row.precision)

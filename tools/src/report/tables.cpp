@@ -189,7 +189,8 @@ std::string format_objects_csv(const std::vector<ObjectRow>& objects) {
     out << (i ? "," : "") << kVisibilityColumns[i];
   }
   out << ",x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,max_var_cm2,confident,err_cm,"
-         "init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,confident_radius,ess_min,time_ms\n";
+         "init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,confident_radius,ess_min,time_"
+         "ms\n";
   const auto optional = [](const std::optional<double>& value) {
     return value ? format_number(*value) : std::string();
   };
@@ -206,8 +207,8 @@ std::string format_objects_csv(const std::vector<ObjectRow>& objects) {
           << format_number(e.var_y_cm2) << ',' << format_number(e.var_z_cm2) << ','
           << format_number(e.max_variance_cm2()) << ',' << (e.confident ? 1 : 0) << ','
           << optional(e.err_cm) << ',' << optional(e.init_err_cm) << ',' << optional(e.err_x_cm)
-          << ',' << optional(e.err_y_cm) << ',' << optional(e.err_z_cm) << ','
-          << optional(e.nees) << ',' << format_number(e.radius95_cm()) << ','
+          << ',' << optional(e.err_y_cm) << ',' << optional(e.err_z_cm) << ',' << optional(e.nees)
+          << ',' << format_number(e.radius95_cm()) << ','
           << (e.confident_radius ? (*e.confident_radius ? "1" : "0") : "") << ','
           << optional(e.ess_min) << ',' << optional(e.time_ms);
     } else {

@@ -41,9 +41,9 @@ std::vector<double> log_sweep(double min, double max, int steps_per_decade,
   std::vector<double> values;
   for (int k = 0; k <= steps; ++k) {
     const double value =
-        k == steps ? max
-                   : round_significant(
-                         min * std::pow(10.0, static_cast<double>(k) / steps_per_decade), 4);
+        k == steps
+            ? max
+            : round_significant(min * std::pow(10.0, static_cast<double>(k) / steps_per_decade), 4);
     const bool near_exact = std::any_of(exact.begin(), exact.end(), [&](double t) {
       return std::abs(value - t) <= kMergeRelativeDistance * t;
     });
@@ -125,8 +125,8 @@ bool ThresholdOptions::IsValid(std::string* why) const {
   }
   if (!(radius_sweep_min_cm > 0.0 && radius_sweep_max_cm > radius_sweep_min_cm) ||
       !std::isfinite(radius_sweep_max_cm)) {
-    *why = "radius sweep needs 0 < min < max, got " + std::to_string(radius_sweep_min_cm) +
-           " .. " + std::to_string(radius_sweep_max_cm) + " cm";
+    *why = "radius sweep needs 0 < min < max, got " + std::to_string(radius_sweep_min_cm) + " .. " +
+           std::to_string(radius_sweep_max_cm) + " cm";
     return false;
   }
   if (chosen_radius_cm && (!(*chosen_radius_cm > 0.0) || !std::isfinite(*chosen_radius_cm))) {
@@ -164,11 +164,11 @@ RadiusRow evaluate_radius(const std::vector<ObjectRow>& objects, double radius_c
                           double accurate_cm, double visibility_cutoff) {
   RadiusRow row;
   row.radius_cm = radius_cm;
-  row.row = evaluate_decision(objects, radius_cm * radius_cm / kChiSquare3Quantile95, accurate_cm,
-                              visibility_cutoff, [radius_cm](const PoseEstimate& estimate) {
-                                return confident_within_radius(estimate.max_variance_cm2(),
-                                                               radius_cm);
-                              });
+  row.row =
+      evaluate_decision(objects, radius_cm * radius_cm / kChiSquare3Quantile95, accurate_cm,
+                        visibility_cutoff, [radius_cm](const PoseEstimate& estimate) {
+                          return confident_within_radius(estimate.max_variance_cm2(), radius_cm);
+                        });
   return row;
 }
 

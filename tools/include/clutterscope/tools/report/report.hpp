@@ -26,7 +26,7 @@ struct ReportOptions {
   double variance_threshold_cm2 = kPaperVarianceThresholdCm2;  // --variance-threshold-cm2
   double visibility_cutoff = 0.3;                              // --visibility-cutoff
   double min_precision = 0.95;                                 // for the recommended threshold
-  std::optional<double> confidence_radius_cm;                 // --confidence-radius-cm
+  std::optional<double> confidence_radius_cm;                  // --confidence-radius-cm
   BootstrapOptions bootstrap;
   std::uint64_t seed = 1;    // --seed; the bootstrap draws from a stream derived from it
   int images_with_bars = 3;  // per-image visibility bar charts (most cluttered first)

@@ -6,8 +6,8 @@
 // objects below a visibility cutoff it accepts. Pure functions.
 
 #include <clutterscope/tools/report/statistics.hpp>
-#include <optional>
 #include <clutterscope/tools/report/tables.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
