@@ -43,10 +43,10 @@ std::string to_string(Observation observation);  // "measured", "synthetic"
 struct EstimateOptions {
   Observation observation = Observation::kMeasured;
   datasets::DepthCheckOptions depth;  // measured observations: --depth-scale, --no-depth-check
-  int particles = 100;                // M
-  int iterations = 15;                // NBP iterations
-  int gibbs_sweeps = 5;               // kappa
-  int icp_samples = 20;               // K belief samples refined by ICP
+  int particles = 100;   // M
+  int iterations = 15;   // NBP iterations
+  int gibbs_sweeps = 5;  // kappa
+  int icp_samples = 20;  // K belief samples refined by ICP
   double variance_threshold_cm2 = 0.25;
   // The calibrated decision beside the paper's (--confidence-radius-cm): confident iff the 95%
   // ellipsoid of the fused covariance fits in a sphere of this radius (cm, > 0); unset: not made.
@@ -97,7 +97,7 @@ struct ObjectEstimate {
   // of freedom when the variance is honest).
   std::optional<Eigen::Vector3d> error_support_m;
   std::optional<double> nees;
-  double effective_sample_size = 0;  // of the final belief's weights
+  double effective_sample_size = 0;                // of the final belief's weights
   // Eq. 10 visibility of the GT instance (visible / silhouette pixels), for evaluation only.
   std::optional<double> visibility;
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();       // model to camera (from the GT)
