@@ -176,8 +176,9 @@ TEST_F(BenchCalibrationCliGl, TableAgreesWithTheRowsAndTheRowsWithEstimate) {
   EXPECT_FALSE(calibration.contains("confident_radius"));
   const nlohmann::json& level95 = calibration.at("all").at("coverage").at(2);
   EXPECT_EQ(level95.at("nominal"), 0.95);
-  if (with_nees > 0)
+  if (with_nees > 0) {
     EXPECT_DOUBLE_EQ(level95.at("observed").get<double>(), double(inside95) / with_nees);
+  }
   EXPECT_EQ(calibration.at("ess_min").at("count"), estimated);
 }
 
