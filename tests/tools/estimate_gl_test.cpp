@@ -202,7 +202,7 @@ TEST_F(EstimateGl, JobsOneAndTwoGiveByteIdenticalOutputs) {
     EXPECT_EQ(read_file(one / file), read_file(two / file)) << file;
   const auto rows = read_csv(one / "estimates.csv");
   ASSERT_GE(rows.size(), 2u);
-  EXPECT_EQ(rows[0].size(), 17u);
+  EXPECT_EQ(rows[0].size(), 23u);
   EXPECT_EQ(read_file(one / "estimates.csv").find("nan"), std::string::npos);
   int estimated = 0;
   for (std::size_t r = 1; r < rows.size(); ++r) {
