@@ -245,7 +245,12 @@ void print_table(const std::vector<CalibrationRow>& rows,
   }
   print_line("all", all, e.confidence_radius_cm);
   print_line("confident", confident, e.confidence_radius_cm);
-  std::printf("\nvisibility >= 90%% confident: %ld of %ld (%s)\n", high_confident, high,
+  std::printf(
+      "\ncovNN: share inside the NN%% ellipsoid (honest: 0.NN); nees_med: median NEES (honest: "
+      "2.37); no_nees: estimates without a finite NEES; essNN: ess_min quantiles (of M); err_cm: "
+      "mean error; conf: confident estimates; conf_err: their mean error (cm); conf>2cm: share "
+      "of them off by more than 2 cm; conf_sh: share of the band confident\n");
+  std::printf("visibility >= 90%% confident: %ld of %ld (%s)\n", high_confident, high,
               share_cell(high_confident, high).c_str());
   if (e.confidence_radius_cm) {
     std::printf("conf_R: confident iff the 95%% ellipsoid fits in a sphere of %g cm\n",
