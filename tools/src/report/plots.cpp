@@ -73,6 +73,14 @@ std::string threshold_sweep_plot(const ThresholdAnalysis& analysis) {
     std::snprintf(label, sizeof(label), "recommended %.3g cm\u00b2", *recommended.value);
     chart.add_vertical_line(*recommended.value, svg::category_colour(4), label);
   }
+  if (analysis.chosen_radius) {
+    // The radius decision is the variance threshold R^2 / chi2_3(0.95): the same curves.
+    char label[96];
+    std::snprintf(label, sizeof(label), "radius %g cm (= %.3g cm\u00b2)",
+                  analysis.chosen_radius->radius_cm, analysis.chosen_radius->row.threshold_cm2);
+    chart.add_vertical_line(analysis.chosen_radius->row.threshold_cm2, svg::category_colour(5),
+                            label);
+  }
   return chart.render();
 }
 

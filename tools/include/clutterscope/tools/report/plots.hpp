@@ -19,7 +19,8 @@ std::string variance_visibility_plot(const std::vector<ObjectRow>& objects,
                                      double variance_threshold_cm2, double accurate_cm);
 
 // Precision, recall and F1 against the variance threshold (log x), with the chosen and the
-// recommended thresholds as vertical lines.
+// recommended thresholds as vertical lines, and with a chosen confidence radius R its
+// equivalent threshold R^2 / chi2_3(0.95).
 std::string threshold_sweep_plot(const ThresholdAnalysis& analysis);
 
 // Calibration (reliability) plot: nominal coverage p (x) against the observed share of
