@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
@@ -201,14 +202,69 @@ TEST_F(EstimateGl, JobsOneAndTwoGiveByteIdenticalOutputs) {
     EXPECT_EQ(read_file(one / file), read_file(two / file)) << file;
   const auto rows = read_csv(one / "estimates.csv");
   ASSERT_GE(rows.size(), 2u);
-  EXPECT_EQ(rows[0].size(), 17u);
+  EXPECT_EQ(rows[0].size(), 23u);
   EXPECT_EQ(read_file(one / "estimates.csv").find("nan"), std::string::npos);
   int estimated = 0;
   for (std::size_t r = 1; r < rows.size(); ++r) {
-    ASSERT_EQ(rows[r].size(), 17u) << r;
+    ASSERT_EQ(rows[r].size(), 23u) << r;
     if (!rows[r][6].empty()) ++estimated;
   }
   EXPECT_GE(estimated, 6);
+}
+
+TEST_F(EstimateGl, ConfidenceRadiusDecidesFromThe95PercentEllipsoid) {
+  const fs::path out = fresh_dir("estimate_radius");
+  ASSERT_EQ(run_merged("estimate " + dataset_->string() + " --out " + out.string() +
+                       " --scenes 0 --confidence-radius-cm 1.5 --no-time" + kFast)
+                .exit_code,
+            0);
+  const auto rows = read_csv(out / "estimates.csv");
+  std::map<std::string, std::size_t> column;
+  for (std::size_t c = 0; c < rows[0].size(); ++c) column[rows[0][c]] = c;
+  int confident_radius = 0, estimated = 0;
+  for (std::size_t r = 1; r < rows.size(); ++r) {
+    const auto& row = rows[r];
+    if (row[column.at("var_x_cm2")].empty()) {
+      EXPECT_TRUE(row[column.at("confident_radius")].empty());
+      continue;
+    }
+    ++estimated;
+    double max_variance = 0;
+    for (const char* axis : {"var_x_cm2", "var_y_cm2", "var_z_cm2"})
+      max_variance = std::max(max_variance, std::stod(row[column.at(axis)]));
+    const double radius = std::sqrt(7.814727903251178 * max_variance);
+    EXPECT_NEAR(std::stod(row[column.at("radius95_cm")]), radius, 1e-5 * (1 + radius));
+    EXPECT_EQ(row[column.at("confident_radius")], radius <= 1.5 ? "1" : "0") << radius;
+    confident_radius += row[column.at("confident_radius")] == "1";
+    // nees = sum err_a^2 / var_a (empty where a variance is 0).
+    // Checked where the columns' rounding (err_* to 4 decimals) stays below 1%.
+    double nees = 0;
+    bool checkable = true;
+    for (const char* axis : {"x", "y", "z"}) {
+      const double err = std::stod(row[column.at(std::string("err_") + axis + "_cm")]);
+      const double var = std::stod(row[column.at(std::string("var_") + axis + "_cm2")]);
+      if (var == 0 || std::abs(err) < 0.01) checkable = false;
+      if (var > 0) nees += err * err / var;
+    }
+    if (checkable) {
+      EXPECT_NEAR(std::stod(row[column.at("nees")]), nees, 0.02 * nees) << "row " << r;
+    }
+  }
+  ASSERT_GT(estimated, 0);
+  const nlohmann::json summary = nlohmann::json::parse(read_file(out / "summary.json"));
+  const nlohmann::json& calibration = summary.at("calibration");
+  EXPECT_EQ(calibration.at("all").at("count"), estimated);
+  EXPECT_EQ(calibration.at("confident_radius").at("count"), confident_radius);
+  EXPECT_EQ(calibration.at("all").at("coverage").size(), 4u);
+  EXPECT_EQ(summary.at("options").at("confidence_radius_cm"), 1.5);
+
+  const CommandRun refused =
+      run_merged("estimate " + dataset_->string() + " --out " +
+                 fresh_dir("estimate_radius_bad").string() + " --confidence-radius-cm -1" + kFast);
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("--confidence-radius-cm must be a finite number > 0"),
+            std::string::npos)
+      << refused.output;
 }
 
 TEST_F(EstimateGl, TimedRunsDifferOnlyInTheTimeColumn) {
@@ -224,7 +280,7 @@ TEST_F(EstimateGl, TimedRunsDifferOnlyInTheTimeColumn) {
   auto a = read_csv(one / "estimates.csv"), b = read_csv(two / "estimates.csv");
   ASSERT_EQ(a.size(), b.size());
   for (std::size_t r = 1; r < a.size(); ++r) {
-    EXPECT_FALSE(a[r][16].empty());
+    EXPECT_FALSE(a[r].back().empty());  // time_ms
     a[r].pop_back();
     b[r].pop_back();
     EXPECT_EQ(a[r], b[r]) << "row " << r;
@@ -309,7 +365,7 @@ TEST_F(EstimateGl, BadInputIsRecordedPerObjectWithoutNaN) {
       << summary.at("image_failures").dump();
   // Every object of image (0, 0) failed: its rows have empty numeric fields.
   for (const auto& row : read_csv(out / "estimates.csv")) {
-    EXPECT_EQ(row.size(), 17u) << "every row has the 17 columns of the header";
+    EXPECT_EQ(row.size(), 23u) << "every row has the 23 columns of the header";
     if (row[1] == "0" && row[2] == "0") {
       EXPECT_TRUE(row[6].empty());
       EXPECT_TRUE(row[9].empty());

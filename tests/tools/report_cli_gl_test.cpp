@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <clutterscope/render/context.hpp>
 #include <cstdio>
 #include <filesystem>
@@ -369,6 +370,58 @@ TEST_F(ReportCli, ThresholdsPrintsTheCheckFromAReportFolder) {
   ASSERT_EQ(check.exit_code, 0) << check.errors;
   EXPECT_FALSE(check.output.empty());
   EXPECT_NE(check.output.find("0.5"), std::string::npos) << check.output;
+}
+
+TEST_F(ReportCli, ConfidenceRadiusReachesTheEstimatorTheReportAndThresholds) {
+  const fs::path out = *root_ / "report_radius";
+  const CommandRun report =
+      run(report_arguments(dataset(), out, " --confidence-radius-cm 1.5 --no-notebook"));
+  ASSERT_EQ(report.exit_code, 0) << report.errors;
+  // Forwarded to the estimator: its confident_radius column is filled.
+  const std::vector<std::string> estimates = lines_of(read_text(out / "estimate/estimates.csv"));
+  EXPECT_NE(estimates[0].find(",nees,radius95_cm,confident_radius,"), std::string::npos);
+  EXPECT_EQ(read_json(out / "estimate/summary.json")["options"]["confidence_radius_cm"], 1.5);
+  const nlohmann::json summary = read_json(out / "summary.json");
+  EXPECT_EQ(summary["options"]["confidence_radius_cm"], 1.5);
+  EXPECT_EQ(summary["thresholds"]["radius"]["chosen"]["radius_cm"], 1.5);
+  EXPECT_EQ(summary["calibration"]["all"]["count"], summary["counts"]["with_error"]);
+  EXPECT_TRUE(summary["calibration"]["has_nees"].get<bool>());
+  EXPECT_TRUE(fs::exists(out / "plots" / "calibration.svg"));
+  const std::string html = read_text(out / "report.html");
+  EXPECT_NE(html.find("id=\"calibration\""), std::string::npos);
+  // The joined table has the estimator's decision.
+  const std::vector<std::string> joined = lines_of(read_text(out / "objects.csv"));
+  EXPECT_NE(joined[0].find(",confident_radius,"), std::string::npos);
+  const auto fields = [](const std::string& line) {
+    std::vector<std::string> cells;
+    std::string cell;
+    std::istringstream in(line);
+    while (std::getline(in, cell, ',')) cells.push_back(cell);
+    if (!line.empty() && line.back() == ',') cells.push_back("");
+    return cells;
+  };
+  const std::vector<std::string> header = fields(joined[0]);
+  const auto column = [&header](const std::string& name) {
+    return std::find(header.begin(), header.end(), name) - header.begin();
+  };
+  int decided = 0;
+  for (std::size_t i = 1; i < joined.size(); ++i) {
+    const std::vector<std::string> row = fields(joined[i]);
+    if (row[column("var_x_cm2")].empty()) continue;
+    const double radius95 = std::stod(row[column("radius95_cm")]);
+    EXPECT_EQ(row[column("confident_radius")], radius95 <= 1.5 ? "1" : "0") << joined[i];
+    ++decided;
+  }
+  EXPECT_GT(decided, 0);
+
+  const CommandRun check =
+      run("thresholds \"" + out.string() + "\" --variance-cm2 0.25 --radius-cm 1.5");
+  ASSERT_EQ(check.exit_code, 0) << check.errors;
+  EXPECT_NE(check.output.find("confidence radius 1.5 cm"), std::string::npos) << check.output;
+  const CommandRun refused =
+      run("thresholds \"" + out.string() + "\" --variance-cm2 0.25 --radius-cm 0");
+  EXPECT_EQ(refused.exit_code, 2) << refused.errors;
+  EXPECT_NE(refused.errors.find("--radius-cm must be > 0"), std::string::npos) << refused.errors;
 }
 
 TEST_F(ReportCli, ThresholdsRejectsBadValuesWithExitCode2) {

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/tools/report/report.hpp>
 #include <clutterscope/tools/report/svg.hpp>
@@ -156,6 +157,82 @@ TEST_F(ReportHtml, SummaryValidatesAgainstTheSchema) {
   EXPECT_EQ(json["run"]["dataset"], "tray6");
   EXPECT_EQ(json["bands"].size(), 10u);
   EXPECT_EQ(json["thresholds"]["chosen"]["threshold_cm2"], 0.25);
+}
+
+TEST_F(ReportHtml, CalibrationSectionPlotAndSummaryFollowTheNees) {
+  // Ten estimates with hand-set NEES: the confident ones (variance <= 0.25) are 0.2 (A), 1,
+  // 3, 8 and empty (a zero variance); the others 2, 6, 7, 12 and 20.
+  std::vector<ObjectRow> rows;
+  const double nees[] = {0.2, 1.0, 3.0, 8.0, -1.0, 2.0, 6.0, 7.0, 12.0, 20.0};
+  for (int i = 0; i < 10; ++i) {
+    ObjectRow row = testing::object(0.1 * i, i < 5 ? 0.1 : 1.0, 0.5, 0, i);
+    row.estimate->err_x_cm = 0.1;
+    row.estimate->err_y_cm = row.estimate->err_z_cm = 0.0;
+    if (nees[i] >= 0) row.estimate->nees = nees[i];
+    row.estimate->ess_min = 1.0 + i;
+    rows.push_back(row);
+  }
+  rows.push_back(testing::unestimated(1.0, 0, 10));
+  ReportOptions options;
+  options.bootstrap.resamples = 200;
+  options.confidence_radius_cm = 1.0;  // radius95 of 0.1 cm^2 is 0.884 cm: the same five
+  const ReportAnalysis analysis = analyse_report(rows, {}, options);
+  const CalibrationAnalysis& c = analysis.calibration;
+  ASSERT_TRUE(c.has_nees);
+  EXPECT_EQ(c.all.count, 10);
+  EXPECT_EQ(c.all.nees_missing, 1);
+  // <= 2.366: 0.2 1 2 (3 of 9); <= 6.251: + 3 6; <= 7.815: + 7; <= 11.34: + 8.
+  EXPECT_DOUBLE_EQ(*c.all.observed[0].value, 3.0 / 9);
+  EXPECT_DOUBLE_EQ(*c.all.observed[1].value, 5.0 / 9);
+  EXPECT_DOUBLE_EQ(*c.all.observed[2].value, 6.0 / 9);
+  EXPECT_DOUBLE_EQ(*c.all.observed[3].value, 7.0 / 9);
+  EXPECT_DOUBLE_EQ(*c.all.median_nees.value, 6.0);
+  EXPECT_EQ(c.confident.count, 5);
+  EXPECT_DOUBLE_EQ(*c.confident.observed[2].value, 3.0 / 4);
+  ASSERT_TRUE(c.confident_radius);
+  EXPECT_EQ(c.confident_radius->count, 5);
+  EXPECT_DOUBLE_EQ(*c.ess_min.p50.value, 5.5);
+
+  const std::vector<NamedPlot> plots = standard_plots(rows, analysis);
+  const auto calibration_plot = std::find_if(
+      plots.begin(), plots.end(), [](const NamedPlot& p) { return p.name == "calibration"; });
+  ASSERT_NE(calibration_plot, plots.end());
+  EXPECT_NE(calibration_plot->svg.find("honest (observed = nominal)"), std::string::npos);
+  EXPECT_NE(calibration_plot->svg.find("all estimates (n = 9)"), std::string::npos);
+  const auto sweep = std::find_if(plots.begin(), plots.end(),
+                                  [](const NamedPlot& p) { return p.name == "threshold_sweep"; });
+  ASSERT_NE(sweep, plots.end());
+  EXPECT_NE(sweep->svg.find("radius 1 cm (= 0.128 cm\u00b2)"), std::string::npos);
+  const ReportFiles files = write_report(dir_, rows, analysis, plots, run_record());
+  EXPECT_EQ(validate_summary(files.summary_json), 0) << validation_message(files.summary_json);
+  const auto json = nlohmann::json::parse(testing::read_text(files.summary_json));
+  EXPECT_EQ(json["calibration"]["all"]["coverage"][2]["nominal"], 0.95);
+  EXPECT_DOUBLE_EQ(json["calibration"]["all"]["coverage"][2]["observed"].get<double>(), 6.0 / 9);
+  EXPECT_EQ(json["calibration"]["confident_radius"]["count"], 5);
+  EXPECT_EQ(json["options"]["confidence_radius_cm"], 1.0);
+  EXPECT_EQ(json["thresholds"]["radius"]["chosen"]["radius_cm"], 1.0);
+  EXPECT_EQ(json["thresholds"]["radius"]["chosen"]["as_variance_threshold"]["accepted"], 5);
+  const std::string html = testing::read_text(files.report_html);
+  for (const char* text :
+       {"id=\"calibration\"", "inside 95% ellipsoid", "Confidence radius", "Recommended radius"}) {
+    EXPECT_NE(html.find(text), std::string::npos) << text;
+  }
+  // The joined table carries the calibration columns and reads back to the same bytes.
+  const std::string objects = testing::read_text(files.objects_csv);
+  EXPECT_EQ(format_objects_csv(read_objects_csv(files.objects_csv)), objects);
+  EXPECT_NE(objects.find(",nees,radius95_cm,confident_radius,"), std::string::npos);
+
+  // Without the calibration columns (an earlier estimates.csv): no plot, a note, still valid.
+  std::vector<ObjectRow> old = testing::synthetic_dataset(2);
+  const ReportAnalysis without = analyse_report(old, {}, options);
+  EXPECT_FALSE(without.calibration.has_nees);
+  const std::vector<NamedPlot> old_plots = standard_plots(old, without);
+  EXPECT_TRUE(std::none_of(old_plots.begin(), old_plots.end(),
+                           [](const NamedPlot& p) { return p.name == "calibration"; }));
+  EXPECT_NE(report_html(without, {}, run_record()).find("no per-axis errors and NEES"),
+            std::string::npos);
+  testing::write_text(dir_ / "old.json", summary_json(without, {}).dump(2));
+  EXPECT_EQ(validate_summary(dir_ / "old.json"), 0) << validation_message(dir_ / "old.json");
 }
 
 TEST_F(ReportHtml, UndefinedStatisticsAreNullWithReasonsAndStillValid) {

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/tools/report/tables.hpp>
 
@@ -65,6 +66,53 @@ TEST_F(ReportTables, JoinedTableRoundTripsToIdenticalBytes) {
   EXPECT_FALSE(again[2].estimate);
   EXPECT_EQ(format_objects_csv(again), joined);
   EXPECT_NE(joined.find("\"lemon tea, green\""), std::string::npos);
+}
+
+TEST_F(ReportTables, ReadsTheCalibrationColumnsAndKeepsThemThroughTheJoin) {
+  // estimates.csv of this version: per-axis errors, nees (empty: a zero variance),
+  // radius95_cm and confident_radius (empty without --confidence-radius-cm).
+  const std::string estimates =
+      "split,scene_id,im_id,gt_id,obj_id,label,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,"
+      "confident,err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,"
+      "confident_radius,ess_min,time_ms\n"
+      "test,1,0,1,7,lemon tea,10.5,-20,650,1.5,0.25,3,0,2.5,4,1.5,-2,0,,4.84,0,12.5,30\n"
+      "test,1,0,0,3,coffee,1,2,700,0.01,0.02,0.005,1,0.4,1.2,0.1,-0.2,0.3,20,0.395,1,50,31\n";
+  auto objects = read_objects_csv(file("objects.csv", kObjectsCsv));
+  join_estimates(objects, read_estimates_csv(file("estimates.csv", estimates)),
+                 dir_ / "estimates.csv");
+  const PoseEstimate& lemon = *objects[1].estimate;
+  EXPECT_DOUBLE_EQ(*lemon.err_x_cm, 1.5);
+  EXPECT_DOUBLE_EQ(*lemon.err_y_cm, -2.0);
+  EXPECT_FALSE(lemon.nees);  // empty: missing, not a number
+  EXPECT_EQ(lemon.confident_radius, false);
+  EXPECT_DOUBLE_EQ(*objects[0].estimate->nees, 20.0);
+  EXPECT_EQ(objects[0].estimate->confident_radius, true);
+  // radius95_cm is derived from the variances: sqrt(7.8147 * 3) for the lemon tea.
+  EXPECT_NEAR(lemon.radius95_cm(), 4.841919424, 1e-8);
+
+  const std::string joined = format_objects_csv(objects);
+  EXPECT_NE(joined.find(",err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,"
+                        "confident_radius,ess_min,time_ms\n"),
+            std::string::npos);
+  const auto path = file("joined.csv", joined);
+  const auto again = read_objects_csv(path);
+  EXPECT_DOUBLE_EQ(*again[0].estimate->err_z_cm, 0.3);
+  EXPECT_FALSE(again[1].estimate->nees);
+  EXPECT_EQ(format_objects_csv(again), joined);
+  // The tray (no estimate) has every estimate column empty: as many fields as the header.
+  const std::string tray_line = joined.substr(joined.rfind("test,1,0,2"));
+  const std::string header = joined.substr(0, joined.find('\n'));
+  EXPECT_EQ(std::count(tray_line.begin(), tray_line.end(), ','),
+            std::count(header.begin(), header.end(), ','));
+}
+
+TEST_F(ReportTables, EstimatesOfEarlierVersionsHaveNoCalibrationColumns) {
+  auto objects = read_objects_csv(file("objects.csv", kObjectsCsv));
+  join_estimates(objects, read_estimates_csv(file("estimates.csv", kEstimatesCsv)),
+                 dir_ / "estimates.csv");
+  EXPECT_FALSE(objects[0].estimate->err_x_cm);
+  EXPECT_FALSE(objects[0].estimate->nees);
+  EXPECT_FALSE(objects[0].estimate->confident_radius);
 }
 
 TEST_F(ReportTables, FormatsNumbersInShortestRoundTripForm) {

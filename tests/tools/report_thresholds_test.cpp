@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <clutterscope/tools/report/calibration.hpp>
 #include <clutterscope/tools/report/thresholds.hpp>
 #include <cmath>
 
@@ -171,6 +173,58 @@ TEST(ReportThresholds, CheckTableShowsTheNumbers) {
       << table;
   EXPECT_NE(format_threshold_check({}, 0.25, 0.3, 1.0).find("n/a (no estimate accepted)"),
             std::string::npos);
+}
+
+TEST(ReportThresholds, RadiusDecisionMatchesItsEquivalentVarianceThreshold) {
+  // R = sqrt(7.8147 * T): R = 1.9767 cm accepts exactly the variances <= 0.5 (A B C D), like
+  // the variance threshold 0.5; a radius a hair smaller drops D (variance 0.5).
+  const auto rows = hand_table();
+  const double radius = std::sqrt(kChiSquare3Quantile95 * 0.5);
+  const RadiusRow at = evaluate_radius(rows, radius, 1.0, 0.3);
+  EXPECT_EQ(at.radius_cm, radius);
+  EXPECT_NEAR(at.row.threshold_cm2, 0.5, 1e-12);
+  EXPECT_EQ(at.row.accepted, 4);
+  EXPECT_EQ(at.row.accepted_accurate, 3);
+  EXPECT_DOUBLE_EQ(*at.row.precision.value, 0.75);
+  EXPECT_EQ(evaluate_radius(rows, radius * (1 - 1e-9), 1.0, 0.3).row.accepted, 3);
+  // Over the sweep, the row counts agree with the variance threshold R^2 / 7.8147.
+  ThresholdOptions options;
+  options.chosen_radius_cm = 2.0;
+  const ThresholdAnalysis analysis = analyse_thresholds(rows, options);
+  ASSERT_TRUE(analysis.chosen_radius);
+  EXPECT_EQ(analysis.chosen_radius->radius_cm, 2.0);
+  for (const RadiusRow& r : analysis.radius_sweep) {
+    const ThresholdRow v = evaluate_threshold(rows, r.row.threshold_cm2 * (1 + 1e-12), 1.0, 0.3);
+    EXPECT_EQ(r.row.accepted, v.accepted) << r.radius_cm;
+    EXPECT_EQ(r.row.accepted_accurate, v.accepted_accurate) << r.radius_cm;
+  }
+}
+
+TEST(ReportThresholds, RadiusSweepHoldsThePaperEquivalentAndTheChosenRadius) {
+  ThresholdOptions options;
+  options.chosen_radius_cm = 1.7;
+  const std::vector<double> radii = sweep_radii(options);
+  EXPECT_EQ(radii.front(), 0.1);
+  EXPECT_EQ(radii.back(), 10.0);
+  EXPECT_TRUE(std::is_sorted(radii.begin(), radii.end()));
+  EXPECT_EQ(std::count(radii.begin(), radii.end(), 1.7), 1);
+  EXPECT_EQ(std::count(radii.begin(), radii.end(), radius95_cm(0.25)), 1);  // 1.398 cm
+  options.chosen_radius_cm = -1.0;
+  std::string why;
+  EXPECT_FALSE(options.IsValid(&why));
+  EXPECT_NE(why.find("--confidence-radius-cm"), std::string::npos);
+}
+
+TEST(ReportThresholds, CheckPrintsTheRadiusDecisionWhenGiven) {
+  const auto rows = hand_table();
+  const std::string without = format_threshold_check(rows, 0.25, 0.3, 1.0);
+  EXPECT_EQ(without.find("confidence radius"), std::string::npos);
+  const std::string with = format_threshold_check(rows, 0.25, 0.3, 1.0, 2.0);
+  EXPECT_EQ(with.substr(0, without.size()), without);
+  EXPECT_NE(with.find("confidence radius 2 cm"), std::string::npos);
+  // R = 2 cm: variance threshold 4 / 7.8147 = 0.5119, accepting A B C D.
+  EXPECT_NE(with.find("0.5119 cm^2"), std::string::npos);
+  EXPECT_NE(with.find("  accepted (confident)     4\n", without.size()), std::string::npos);
 }
 
 }  // namespace

@@ -12,10 +12,12 @@
 #include <clutterscope/tools/batch.hpp>
 #include <clutterscope/tools/estimate/scene_estimate.hpp>
 #include <clutterscope/tools/formats.hpp>
+#include <clutterscope/tools/report/calibration.hpp>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,7 +34,8 @@ namespace {
 
 constexpr const char* kEstimatesHeader =
     "split,scene_id,im_id,gt_id,obj_id,label,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,"
-    "confident,err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,ess_min,time_ms";
+    "confident,err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,confident_radius,"
+    "ess_min,time_ms";
 constexpr const char* kBopHeader = "scene_id,im_id,obj_id,score,R,t,time";
 
 struct EstimateArguments {
@@ -98,10 +101,16 @@ class EstimateWorker {
         row.add(object.confident ? "1" : "0");
         row.add(100 * *object.error_m, 4).add(100 * *object.initial_error_m, 4);
         for (int a = 0; a < 3; ++a) row.add(100 * (*object.error_support_m)[a], 4);
-        row.add(format_general(*object.nees, 6));
+        row.add(format_general(*object.nees, 6));  // empty when not finite (a zero variance)
+        const double max_variance_cm2 = 1e4 * object.variance.maxCoeff();
+        row.add(format_general(report::radius95_cm(max_variance_cm2), 6));
+        const auto& radius = arguments_.estimate.confidence_radius_cm;
+        row.add(!radius                                                      ? ""
+                : report::confident_within_radius(max_variance_cm2, *radius) ? "1"
+                                                                             : "0");
         row.add(object.effective_sample_size, 2);
       } else {
-        for (int column = 0; column < 14; ++column) row.add("");  // x_mm .. ess_min
+        for (int column = 0; column < 16; ++column) row.add("");  // x_mm .. ess_min
       }
       if (arguments_.no_time) {
         row.add("");
@@ -115,6 +124,13 @@ class EstimateWorker {
         entry["confident"] = object.confident;
         entry["err_cm"] = json_rounded(100 * *object.error_m, 4);
         entry["max_var_cm2"] = json_rounded(1e4 * object.variance.maxCoeff(), 6);
+        // Calibration (summary.json): a non-finite NEES (a zero variance) is left out.
+        if (report::usable_nees(object.nees)) entry["nees"] = *object.nees;
+        entry["ess_min"] = object.effective_sample_size;
+        if (arguments_.estimate.confidence_radius_cm) {
+          entry["confident_radius"] = report::confident_within_radius(
+              1e4 * object.variance.maxCoeff(), *arguments_.estimate.confidence_radius_cm);
+        }
         const double threshold = arguments_.estimate.variance_threshold_cm2;
         const double score = std::exp(-1e4 * object.variance.maxCoeff() / threshold);
         CsvRow bop;
@@ -212,6 +228,17 @@ class EstimateSummary : public SummaryBuilder {
       const double variance = object.at("max_var_cm2").get<double>();
       const bool confident = object.at("confident").get<bool>();
       errors_.push_back(err);
+      // Items stored by an earlier version have no calibration fields: an absent NEES counts
+      // as missing, an absent ESS is left out.
+      const std::optional<double> nees =
+          object.contains("nees") ? std::optional<double>(object.at("nees").get<double>())
+                                  : std::nullopt;
+      nees_all_.push_back(nees);
+      if (confident) nees_confident_.push_back(nees);
+      if (object.contains("confident_radius") && object.at("confident_radius").get<bool>()) {
+        nees_confident_radius_.push_back(nees);
+      }
+      if (object.contains("ess_min")) ess_.push_back(object.at("ess_min").get<double>());
       if (confident) {
         confident_errors_.push_back(err);
         if (err > 2.0) ++confident_over_2cm_;
@@ -267,6 +294,20 @@ class EstimateSummary : public SummaryBuilder {
         "visibility is Eq. 10 of the rendered GT scene; max_var is the largest per-axis variance "
         "of the fused ICP fits";
     summary["accuracy"] = accuracy;
+    nlohmann::ordered_json calibration;
+    calibration["note"] =
+        "coverage: share of estimates with nees = sum_a err_a^2 / var_a (support-frame axes) at "
+        "most the chi-square (3 dof) quantile of each nominal level, over the estimates with a "
+        "finite nees (nees_missing: a zero variance); confident is every axis variance <= "
+        "variance_threshold_cm2";
+    calibration["all"] = report::coverage_json(report::coverage(nees_all_));
+    calibration["confident"] = report::coverage_json(report::coverage(nees_confident_));
+    if (fingerprint_.contains("confidence_radius_cm")) {
+      calibration["confident_radius"] =
+          report::coverage_json(report::coverage(nees_confident_radius_));
+    }
+    calibration["ess_min"] = report::ess_json(report::ess_quantiles(ess_));
+    summary["calibration"] = nlohmann::json::parse(calibration.dump());
     summary["object_failures"] = object_failures_;
     summary["image_failures"] = image_failures_;
     summary["input_checks"] = input_checks_.to_json();
@@ -282,7 +323,8 @@ class EstimateSummary : public SummaryBuilder {
   long images_ = 0, graphs_inferred_ = 0, objects_ = 0, estimated_ = 0;
   long synthetic_observations_ = 0, synthetic_detections_ = 0;
   long confident_over_2cm_ = 0, high_visibility_ = 0, high_visibility_confident_ = 0;
-  std::vector<double> errors_, confident_errors_, low_variances_, high_variances_;
+  std::vector<double> errors_, confident_errors_, low_variances_, high_variances_, ess_;
+  std::vector<std::optional<double>> nees_all_, nees_confident_, nees_confident_radius_;
   nlohmann::json object_failures_ = nlohmann::json::array();
   nlohmann::json image_failures_ = nlohmann::json::array();
 };
@@ -312,6 +354,7 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
   job.fingerprint["gibbs_sweeps"] = e.gibbs_sweeps;
   job.fingerprint["icp_samples"] = e.icp_samples;
   job.fingerprint["variance_threshold_cm2"] = e.variance_threshold_cm2;
+  if (e.confidence_radius_cm) job.fingerprint["confidence_radius_cm"] = *e.confidence_radius_cm;
   job.fingerprint["seed"] = e.seed;
   job.fingerprint["detections"] =
       arguments.detections.empty() ? "" : fs::absolute(arguments.detections).string();
@@ -351,6 +394,65 @@ void add_nbp_options(CLI::App& command, EstimateOptions& options) {
       ->capture_default_str();
 }
 
+void add_estimator_options(CLI::App& command, EstimateOptions& e) {
+  add_nbp_options(command, e);
+  command
+      .add_option("--variance-threshold-cm2", e.variance_threshold_cm2,
+                  "confident iff every axis variance of the fused fits is <= this (cm^2, > 0)")
+      ->capture_default_str();
+  command
+      .add_option_function<double>(
+          "--confidence-radius-cm", [&e](double cm) { e.confidence_radius_cm = cm; },
+          "also decide confident_radius: the 95% ellipsoid of the fused covariance (semi-axes "
+          "sqrt(7.81 var_a)) fits in a sphere of this radius (cm, > 0); estimates.csv's "
+          "radius95_cm is that ellipsoid's largest semi-axis, confident_radius is empty without "
+          "this option")
+      ->type_name("R");
+  command
+      .add_option("--unary-lambda", e.unary_lambda,
+                  "lambda_r of Eq. 6 per metre of summed pixel distance (< 0)")
+      ->capture_default_str();
+  command.add_option_function<double>(
+      "--unary-truncation-mm", [&e](double mm) { e.unary_truncation_m = 1e-3 * mm; },
+      "per-pixel distance truncation of Eq. 6 (mm, default 40)");
+  command.add_option_function<double>(
+      "--bandwidth-floor-mm", [&e](double mm) { e.min_bandwidth_m = 1e-3 * mm; },
+      "floor of the kernel standard deviation of messages and beliefs (mm, default 5)");
+  command
+      .add_option("--correlated-pixels", e.correlated_pixels,
+                  "calibrated covariance: the ICP fit's depth noise counts as independent once "
+                  "per this many matched pixels (>= 1; larger: wider variances)")
+      ->capture_default_str();
+  command
+      .add_option("--min-ess-fraction", e.min_effective_sample_fraction,
+                  "adaptive tempering: the unary and non-contact factors of a node are raised to "
+                  "the largest power <= 1 that keeps its belief's effective sample size >= this "
+                  "fraction of the particles (0 = off, the paper's untempered weights)")
+      ->capture_default_str();
+  command
+      .add_option("--grid-pixels", e.grid_pixels,
+                  "scoring grid: the longer side of a detection box in grid pixels")
+      ->capture_default_str();
+  command
+      .add_option("--proxy-triangles", e.proxy_triangles,
+                  "triangles of the decimated models rendered for the unary (at most)")
+      ->capture_default_str();
+  command.add_option_function<double>(
+      "--proxy-tolerance-mm", [&e](double mm) { e.proxy_tolerance_m = 1e-3 * mm; },
+      "decimate the scoring models below --proxy-triangles while their surface stays within "
+      "this distance (mm, default 1)");
+  command
+      .add_option_function<std::string>(
+          "--observation",
+          [&e](const std::string& name) {
+            e.observation = name == "synthetic" ? Observation::kSynthetic : Observation::kMeasured;
+          },
+          "measured (default): the dataset's depth images, an image without one fails; "
+          "synthetic: depth synthesised from the GT render through the sensor model")
+      ->check(CLI::IsMember({"measured", "synthetic"}));
+  add_depth_check_options(command, &e.depth);
+}
+
 void add_estimate_command(CLI::App& app, int* exit_code) {
   register_batch_output(estimate_output_spec());
   auto arguments = std::make_shared<EstimateArguments>();
@@ -362,59 +464,12 @@ void add_estimate_command(CLI::App& app, int* exit_code) {
       "results_bop.csv (BOP 6D results), summary.json and, with --save-beliefs, "
       "beliefs/SPLIT/SCENE/IMID.csv.");
   add_dataset_options(*command, &arguments->dataset);
-  EstimateOptions& e = arguments->estimate;
-  add_nbp_options(*command, e);
-  command
-      ->add_option("--variance-threshold-cm2", e.variance_threshold_cm2,
-                   "confident iff every axis variance of the fused fits is <= this (cm^2, > 0)")
-      ->capture_default_str();
+  add_estimator_options(*command, arguments->estimate);
   command->add_option("--detections", arguments->detections,
                       "BOP 2D detections JSON (default: the synthetic detector on the rendered "
                       "GT labels)");
-  command->add_option("--seed", e.seed, "random seed (per-image streams)")->capture_default_str();
-  command
-      ->add_option("--unary-lambda", e.unary_lambda,
-                   "lambda_r of Eq. 6 per metre of summed pixel distance (< 0)")
+  command->add_option("--seed", arguments->estimate.seed, "random seed (per-image streams)")
       ->capture_default_str();
-  command->add_option_function<double>(
-      "--unary-truncation-mm", [&e](double mm) { e.unary_truncation_m = 1e-3 * mm; },
-      "per-pixel distance truncation of Eq. 6 (mm, default 40)");
-  command->add_option_function<double>(
-      "--bandwidth-floor-mm", [&e](double mm) { e.min_bandwidth_m = 1e-3 * mm; },
-      "floor of the kernel standard deviation of messages and beliefs (mm, default 5)");
-  command
-      ->add_option("--correlated-pixels", e.correlated_pixels,
-                   "calibrated covariance: the ICP fit's depth noise counts as independent once "
-                   "per this many matched pixels (>= 1; larger: wider variances)")
-      ->capture_default_str();
-  command
-      ->add_option("--min-ess-fraction", e.min_effective_sample_fraction,
-                   "adaptive tempering: the unary and non-contact factors of a node are raised to "
-                   "the largest power <= 1 that keeps its belief's effective sample size >= this "
-                   "fraction of the particles (0 = off, the paper's untempered weights)")
-      ->capture_default_str();
-  command
-      ->add_option("--grid-pixels", e.grid_pixels,
-                   "scoring grid: the longer side of a detection box in grid pixels")
-      ->capture_default_str();
-  command
-      ->add_option("--proxy-triangles", e.proxy_triangles,
-                   "triangles of the decimated models rendered for the unary (at most)")
-      ->capture_default_str();
-  command->add_option_function<double>(
-      "--proxy-tolerance-mm", [&e](double mm) { e.proxy_tolerance_m = 1e-3 * mm; },
-      "decimate the scoring models below --proxy-triangles while their surface stays within "
-      "this distance (mm, default 1)");
-  command
-      ->add_option_function<std::string>(
-          "--observation",
-          [&e](const std::string& name) {
-            e.observation = name == "synthetic" ? Observation::kSynthetic : Observation::kMeasured;
-          },
-          "measured (default): the dataset's depth images, an image without one fails; "
-          "synthetic: depth synthesised from the GT render through the sensor model")
-      ->check(CLI::IsMember({"measured", "synthetic"}));
-  add_depth_check_options(*command, &e.depth);
   command->add_flag("--save-beliefs", arguments->save_beliefs,
                     "also write the belief samples of every iteration (camera frame, mm)");
   command->add_flag("--no-time", arguments->no_time,

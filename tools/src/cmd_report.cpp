@@ -46,6 +46,8 @@ const std::vector<StepOption>& step_options() {
        "estimate: surface tolerance of the scoring models"},
       {"estimate", "--bandwidth-floor-mm", false, "estimate: floor of the kernel bandwidth"},
       {"estimate", "--min-ess-fraction", false, "estimate: adaptive tempering of the weights"},
+      {"estimate", "--correlated-pixels", false,
+       "estimate: calibrated covariance's pixel correlation"},
       {"estimate", "--icp-max-distance-mm", false, "estimate: ICP correspondence distance"},
       {"estimate", "--save-beliefs", true,
        "estimate: also write the belief samples of every iteration"},
@@ -106,6 +108,12 @@ void add_report_command(CLI::App& app, int* exit_code) {
       ->add_option("--variance-threshold-cm2", analysis.variance_threshold_cm2,
                    "confident iff every axis variance is <= this (cm^2); also the estimator's")
       ->capture_default_str();
+  command
+      ->add_option_function<double>(
+          "--confidence-radius-cm", [&analysis](double cm) { analysis.confidence_radius_cm = cm; },
+          "also the calibrated decision: confident iff the 95% ellipsoid fits in a sphere of this "
+          "radius (cm); shown beside the variance threshold; also the estimator's")
+      ->type_name("R");
   command
       ->add_option("--visibility-cutoff", analysis.visibility_cutoff,
                    "objects below this visibility fraction count as barely visible")

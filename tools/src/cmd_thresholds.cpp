@@ -19,6 +19,7 @@ struct ThresholdsArguments {
   double variance_cm2 = report::kPaperVarianceThresholdCm2;
   double visibility_cutoff = 0.3;
   std::optional<double> accurate_cm;
+  std::optional<double> radius_cm;
 };
 
 void run_thresholds(const ThresholdsArguments& arguments) {
@@ -27,6 +28,7 @@ void run_thresholds(const ThresholdsArguments& arguments) {
   options.variance_cm2 = arguments.variance_cm2;
   options.visibility_cutoff = arguments.visibility_cutoff;
   options.accurate_cm = arguments.accurate_cm;
+  options.radius_cm = arguments.radius_cm;
   std::string why;
   if (!options.IsValid(&why)) throw CLI::ValidationError("thresholds", why);
   std::cout << report::threshold_check(options);
@@ -60,6 +62,11 @@ void add_thresholds_command(CLI::App& app, int* exit_code) {
                    "accurate iff the position error is at most this (cm; default: the "
                    "report's)")
       ->type_name("A");
+  command
+      ->add_option("--radius-cm", arguments->radius_cm,
+                   "also check the radius decision: confident iff the 95% ellipsoid fits in a "
+                   "sphere of radius R (cm), i.e. every axis variance <= R^2 / 7.815")
+      ->type_name("R");
   command->callback([arguments, exit_code] {
     run_thresholds(*arguments);
     *exit_code = 0;

@@ -14,6 +14,10 @@ CLI::App& bench_command_group(CLI::App& app);
 struct EstimateOptions;
 // --particles, --iterations, --gibbs-sweeps and --icp-samples, for every command that estimates.
 void add_nbp_options(CLI::App& command, EstimateOptions& options);
+// Every option that maps onto EstimateOptions except --seed (add_nbp_options, the variance
+// threshold, --confidence-radius-cm, the unary, bandwidth, scoring models, --observation and the
+// depth checks): `estimate` and `bench calibration` take the same estimator options.
+void add_estimator_options(CLI::App& command, EstimateOptions& options);
 
 void add_render_command(CLI::App& app, int* exit_code);
 void add_merge_command(CLI::App& app, int* exit_code);
@@ -25,6 +29,7 @@ void add_detect_command(CLI::App& app, int* exit_code);
 void add_graph_command(CLI::App& app, int* exit_code);
 void add_estimate_command(CLI::App& app, int* exit_code);
 void add_bench_estimate_command(CLI::App& app, int* exit_code);
+void add_bench_calibration_command(CLI::App& app, int* exit_code);
 void add_report_command(CLI::App& app, int* exit_code);
 void add_thresholds_command(CLI::App& app, int* exit_code);
 void add_simulate_command(CLI::App& app, int* exit_code);

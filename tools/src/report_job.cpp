@@ -153,6 +153,9 @@ nlohmann::ordered_json run_record(const ReportArguments& arguments, const fs::pa
                      {"variance_threshold_cm2", analysis.variance_threshold_cm2},
                      {"visibility_cutoff", analysis.visibility_cutoff},
                      {"seed", analysis.seed}};
+  if (analysis.confidence_radius_cm) {
+    run["analysis"]["confidence_radius_cm"] = *analysis.confidence_radius_cm;
+  }
   return run;
 }
 
@@ -197,6 +200,10 @@ void append_estimate_options(const ReportArguments& arguments, std::vector<std::
   line->insert(line->end(), {"--variance-threshold-cm2",
                              report::format_number(arguments.analysis.variance_threshold_cm2),
                              "--seed", std::to_string(arguments.analysis.seed)});
+  if (arguments.analysis.confidence_radius_cm) {
+    line->insert(line->end(), {"--confidence-radius-cm",
+                               report::format_number(*arguments.analysis.confidence_radius_cm)});
+  }
 }
 
 std::string six_digits(int id) {
@@ -389,6 +396,11 @@ nlohmann::json report_fingerprint(const ReportArguments& arguments) {
   estimate["--variance-threshold-cm2"] =
       report::format_number(arguments.analysis.variance_threshold_cm2);
   estimate["--seed"] = std::to_string(arguments.analysis.seed);
+  // Given only: folders of reports without it keep their fingerprint.
+  if (arguments.analysis.confidence_radius_cm) {
+    estimate["--confidence-radius-cm"] =
+        report::format_number(*arguments.analysis.confidence_radius_cm);
+  }
   fingerprint["estimate"] = estimate;
   return fingerprint;
 }

@@ -195,6 +195,9 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (icp_samples < 1) return fail("--icp-samples must be >= 1");
   if (!(variance_threshold_cm2 > 0) || !std::isfinite(variance_threshold_cm2))
     return fail("--variance-threshold-cm2 must be a finite number > 0 (the paper uses 0.25)");
+  if (confidence_radius_cm &&
+      (!(*confidence_radius_cm > 0) || !std::isfinite(*confidence_radius_cm)))
+    return fail("--confidence-radius-cm must be a finite number > 0");
   if (!(unary_lambda < 0) || !std::isfinite(unary_lambda)) return fail("unary lambda must be < 0");
   if (!(unary_truncation_m > 0)) return fail("unary truncation must be > 0");
   if (grid_pixels < 4) return fail("scoring grid must be >= 4 pixels");

@@ -73,6 +73,40 @@ std::string threshold_sweep_plot(const ThresholdAnalysis& analysis) {
     std::snprintf(label, sizeof(label), "recommended %.3g cm\u00b2", *recommended.value);
     chart.add_vertical_line(*recommended.value, svg::category_colour(4), label);
   }
+  if (analysis.chosen_radius) {
+    // The radius decision is the variance threshold R^2 / chi2_3(0.95): the same curves.
+    char label[96];
+    std::snprintf(label, sizeof(label), "radius %g cm (= %.3g cm\u00b2)",
+                  analysis.chosen_radius->radius_cm, analysis.chosen_radius->row.threshold_cm2);
+    chart.add_vertical_line(analysis.chosen_radius->row.threshold_cm2, svg::category_colour(5),
+                            label);
+  }
+  return chart.render();
+}
+
+std::string calibration_plot(const Coverage& all, const Coverage& confident,
+                             const std::optional<Coverage>& confident_radius) {
+  svg::Chart chart(
+      "Calibration: do the 3-D ellipsoids cover their share of errors?",
+      {"nominal coverage p (ellipsoid NEES \u2264 \u03c7\u00b2\u2083(p), %)", false, 0.0, 100.0},
+      {"observed coverage (% of estimates)", false, 0.0, 100.0});
+  chart.add_line({0.0, 100.0}, {0.0, 100.0}, {120, 120, 120}, "honest (observed = nominal)", true);
+  const auto series = [&chart](const Coverage& coverage, int colour, const std::string& name) {
+    std::vector<double> x, y;
+    for (std::size_t level = 0; level < kCoverageLevels.size(); ++level) {
+      if (!coverage.observed[level].defined()) continue;
+      x.push_back(100.0 * kCoverageLevels[level].nominal);
+      y.push_back(100.0 * *coverage.observed[level].value);
+    }
+    if (x.empty()) return;
+    const std::string legend =
+        name + " (n = " + std::to_string(coverage.count - coverage.nees_missing) + ")";
+    chart.add_line(x, y, svg::category_colour(colour), legend);
+    chart.add_scatter(x, y, svg::category_colour(colour), "");  // listed with its line
+  };
+  series(all, 0, "all estimates");
+  series(confident, 1, "confident");
+  if (confident_radius) series(*confident_radius, 2, "confident by radius");
   return chart.render();
 }
 

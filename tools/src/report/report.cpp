@@ -129,6 +129,39 @@ th{background:#f2f2f2}td.text,th.text{text-align:left}td.na{color:#888;font-styl
 figure{margin:16px 0 28px}figure svg{max-width:100%;height:auto;display:block;border:1px solid #eee}figcaption{color:#444;font-size:0.9em;margin-top:4px}
 )";
 
+// Coverage over the estimates with an error against GT (the NEES needs one).
+CalibrationAnalysis analyse_calibration(const std::vector<ObjectRow>& objects,
+                                        const ReportOptions& options) {
+  CalibrationAnalysis calibration;
+  std::vector<std::optional<double>> all, confident, confident_radius;
+  std::vector<double> ess;
+  for (const ObjectRow& object : objects) {
+    if (!object.estimate) continue;
+    const PoseEstimate& estimate = *object.estimate;
+    if (estimate.ess_min) ess.push_back(*estimate.ess_min);
+    if (!estimate.err_cm) continue;
+    calibration.has_nees |= estimate.err_x_cm.has_value();
+    all.push_back(estimate.nees);
+    if (estimate.max_variance_cm2() <= options.variance_threshold_cm2) {
+      confident.push_back(estimate.nees);
+    }
+    if (options.confidence_radius_cm &&
+        confident_within_radius(estimate.max_variance_cm2(), *options.confidence_radius_cm)) {
+      confident_radius.push_back(estimate.nees);
+    }
+  }
+  calibration.all = coverage(all);
+  calibration.confident = coverage(confident);
+  if (options.confidence_radius_cm) calibration.confident_radius = coverage(confident_radius);
+  calibration.ess_min = ess_quantiles(ess);
+  return calibration;
+}
+
+// The radius, and the row of its equivalent variance threshold R^2 / chi2_3(0.95).
+Json radius_row_json(const RadiusRow& row) {
+  return {{"radius_cm", row.radius_cm}, {"as_variance_threshold", threshold_row_json(row.row)}};
+}
+
 }  // namespace
 
 bool ReportOptions::IsValid(std::string* why) const {
@@ -137,6 +170,7 @@ bool ReportOptions::IsValid(std::string* why) const {
   thresholds.visibility_cutoff = visibility_cutoff;
   thresholds.chosen_threshold_cm2 = variance_threshold_cm2;
   thresholds.min_precision = min_precision;
+  thresholds.chosen_radius_cm = confidence_radius_cm;
   if (!thresholds.IsValid(why) || !bootstrap.IsValid(why)) return false;
   if (images_with_bars < 0) {
     *why = "images with visibility bars must be >= 0, got " + std::to_string(images_with_bars);
@@ -203,7 +237,9 @@ ReportAnalysis analyse_report(const std::vector<ObjectRow>& objects,
   threshold_options.visibility_cutoff = options.visibility_cutoff;
   threshold_options.chosen_threshold_cm2 = options.variance_threshold_cm2;
   threshold_options.min_precision = options.min_precision;
+  threshold_options.chosen_radius_cm = options.confidence_radius_cm;
   analysis.thresholds = analyse_thresholds(objects, threshold_options);
+  analysis.calibration = analyse_calibration(objects, options);
 
   // Per-image table.
   std::map<ImageKey, double> scene_visibility;
@@ -261,13 +297,16 @@ nlohmann::ordered_json summary_json(const ReportAnalysis& analysis, const Json& 
   json["schema_version"] = kSummarySchemaVersion;
   json["generator"] = std::string("clutterscope ") + CLUTTERSCOPE_VERSION;
   json["run"] = run.is_object() ? run : Json::object();
-  json["options"] = {{"accurate_cm", options.accurate_cm},
-                     {"variance_threshold_cm2", options.variance_threshold_cm2},
-                     {"visibility_cutoff", options.visibility_cutoff},
-                     {"min_precision", options.min_precision},
-                     {"bootstrap_resamples", options.bootstrap.resamples},
-                     {"confidence", options.bootstrap.confidence},
-                     {"seed", options.seed}};
+  json["options"] = {
+      {"accurate_cm", options.accurate_cm},
+      {"variance_threshold_cm2", options.variance_threshold_cm2},
+      {"visibility_cutoff", options.visibility_cutoff},
+      {"min_precision", options.min_precision},
+      {"confidence_radius_cm",
+       options.confidence_radius_cm ? Json(*options.confidence_radius_cm) : Json(nullptr)},
+      {"bootstrap_resamples", options.bootstrap.resamples},
+      {"confidence", options.bootstrap.confidence},
+      {"seed", options.seed}};
   const ReportCounts& c = analysis.counts;
   json["counts"] = {{"objects", c.objects},
                     {"images", c.images},
@@ -340,10 +379,43 @@ nlohmann::ordered_json summary_json(const ReportAnalysis& analysis, const Json& 
     entry["undefined"] = entry_undefined;
     by_cutoff.push_back(entry);
   }
-  json["thresholds"] = {{"sweep", sweep},
-                        {"chosen", threshold_row_json(t.chosen)},
-                        {"recommended", recommended},
-                        {"by_visibility_cutoff", by_cutoff}};
+  Json radius_sweep = Json::array();
+  for (const RadiusRow& row : t.radius_sweep) radius_sweep.push_back(radius_row_json(row));
+  Json radius_recommended, radius_undefined = Json::object();
+  radius_recommended["min_precision"] = options.min_precision;
+  put(radius_recommended, radius_undefined, "largest_with_min_precision_cm",
+      t.radius_recommendation.largest_with_min_precision);
+  put(radius_recommended, radius_undefined, "best_f1_cm", t.radius_recommendation.best_f1);
+  put(radius_recommended, radius_undefined, "best_f1", t.radius_recommendation.best_f1_value);
+  radius_recommended["undefined"] = radius_undefined;
+  json["thresholds"] = {
+      {"sweep", sweep},
+      {"chosen", threshold_row_json(t.chosen)},
+      {"recommended", recommended},
+      {"by_visibility_cutoff", by_cutoff},
+      {"radius",
+       {{"note",
+         "confident iff the 95% ellipsoid fits in a sphere of radius R: sqrt(7.8147 * max-axis "
+         "variance) <= R, i.e. max-axis variance <= R^2 / 7.8147 (equivalent_threshold_cm2)"},
+        {"sweep", radius_sweep},
+        {"chosen", t.chosen_radius ? radius_row_json(*t.chosen_radius) : Json(nullptr)},
+        {"recommended", radius_recommended}}}};
+
+  const CalibrationAnalysis& calibration = analysis.calibration;
+  Json calibration_json;
+  calibration_json["note"] =
+      "over estimates with an error against GT: coverage is the share with nees = sum_a "
+      "err_a^2 / var_a (support-frame axes) at most the chi-square (3 dof) quantile of each "
+      "nominal level, among those with a finite nees (nees_missing: a zero variance, or an "
+      "estimates.csv without the nees column); confident is max-axis variance <= "
+      "variance_threshold_cm2";
+  calibration_json["has_nees"] = calibration.has_nees;
+  calibration_json["all"] = coverage_json(calibration.all);
+  calibration_json["confident"] = coverage_json(calibration.confident);
+  calibration_json["confident_radius"] =
+      calibration.confident_radius ? coverage_json(*calibration.confident_radius) : Json(nullptr);
+  calibration_json["ess_min"] = ess_json(calibration.ess_min);
+  json["calibration"] = calibration_json;
 
   std::vector<double> scene_visibility;
   for (const ImageSummary& image : analysis.images) {
@@ -406,6 +478,14 @@ std::vector<NamedPlot> standard_plots(const std::vector<ObjectRow>& objects,
                    "Precision, recall and F1 of \"confident\" (every axis variance \u2264 T) "
                    "against \"accurate\" over the swept thresholds.",
                    threshold_sweep_plot(analysis.thresholds)});
+  if (analysis.calibration.has_nees) {
+    plots.push_back({"calibration",
+                     "Nominal against observed coverage of the 3-D error ellipsoids (share of "
+                     "estimates with NEES \u2264 the chi-square 3-dof quantile) for all and for "
+                     "confident estimates; dashed: honest variances.",
+                     calibration_plot(analysis.calibration.all, analysis.calibration.confident,
+                                      analysis.calibration.confident_radius)});
+  }
   plots.push_back({"visibility_histogram", "Distribution of object visibility V_i (Eq. 10).",
                    visibility_histogram_plot(objects, options.visibility_cutoff)});
 
@@ -525,6 +605,47 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
   }
   out << "</table>\n</section>\n";
 
+  // Calibration.
+  const CalibrationAnalysis& calibration = analysis.calibration;
+  out << "<section id=\"calibration\">\n<h2>Calibration of the variances</h2>\n";
+  if (!calibration.has_nees) {
+    out << "<p>estimates.csv has no per-axis errors and NEES (written by an earlier version of "
+           "<code>clutterscope estimate</code>): estimate again for the calibration.</p>\n";
+  } else {
+    out << "<p>With honest variances the normalised error NEES = &Sigma;<sub>a</sub> "
+           "err<sub>a</sub>&sup2; / var<sub>a</sub> (support-frame axes) is chi-square with 3 "
+           "degrees of freedom, so a share p of the errors lies inside its own p-ellipsoid. "
+           "Observed shares below the nominal ones mean the variances claim more certainty than "
+           "the errors show. Estimates with a zero variance have no finite NEES and are counted "
+           "apart.</p>\n<table>\n<tr><th class=\"text\">estimates</th><th>with error</th>"
+           "<th>no finite NEES</th>";
+    for (const CoverageLevel& level : kCoverageLevels) {
+      out << "<th>inside " << fixed(100 * level.nominal, 0) << "% ellipsoid</th>";
+    }
+    out << "<th>median NEES (3-dof: 2.37)</th></tr>\n";
+    const auto coverage_row = [&out](const std::string& name, const Coverage& coverage) {
+      out << "<tr><td class=\"text\">" << name << "</td><td>" << coverage.count << "</td><td>"
+          << coverage.nees_missing << "</td>";
+      for (const Statistic& share : coverage.observed) out << cell(share, 1, true);
+      out << cell(coverage.median_nees, -1) << "</tr>\n";
+    };
+    coverage_row("all", calibration.all);
+    coverage_row("confident (max-axis variance &le; " + general(options.variance_threshold_cm2) +
+                     " cm&sup2;)",
+                 calibration.confident);
+    if (calibration.confident_radius) {
+      coverage_row("confident by radius (95% ellipsoid within " +
+                       general(*options.confidence_radius_cm) + " cm)",
+                   *calibration.confident_radius);
+    }
+    out << "</table>\n";
+  }
+  out << "<p>Effective sample size of the final beliefs (ess_min, of M particles): 10% "
+      << statistic_text(calibration.ess_min.p10, 1) << ", median "
+      << statistic_text(calibration.ess_min.p50, 1) << ", 90% "
+      << statistic_text(calibration.ess_min.p90, 1) << " (n = " << calibration.ess_min.count
+      << ").</p>\n</section>\n";
+
   // Thresholds.
   const auto& rec = t.recommendation;
   out << "<section id=\"thresholds\">\n<h2>Threshold analysis</h2>\n<p class=\"recommendation\">"
@@ -563,6 +684,34 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
     out << "<tr><td>" << fixed(100 * row.visibility_cutoff, 0) << "%</td><td>" << row.objects_below
         << "</td><td>" << row.accepted_below << "</td>" << cell(row.accepted_share, 1, true)
         << "<td>" << row.accepted_below_inaccurate << "</td></tr>\n";
+  }
+  out << "</table>\n";
+  // The radius decision beside the variance threshold.
+  const auto& radius_rec = t.radius_recommendation;
+  out << "<h3>Confidence radius</h3>\n<p>The calibrated decision: confident iff the 95% "
+         "ellipsoid fits in a sphere of radius R, i.e. sqrt(7.815 &middot; max-axis variance) "
+         "&le; R (the same ordering as the variance threshold, R&sup2; / 7.815 cm&sup2;, but in "
+         "centimetres of error when the variances are calibrated). Recommended radius: "
+         "<strong>";
+  if (radius_rec.largest_with_min_precision.defined()) {
+    out << general(*radius_rec.largest_with_min_precision.value)
+        << " cm</strong> (the largest swept radius with precision &ge; "
+        << general(options.min_precision) << ")";
+  } else {
+    out << "none</strong> (" << html_escape(radius_rec.largest_with_min_precision.undefined_reason)
+        << ")";
+  }
+  out << ".</p>\n<table>\n<tr><th>radius R (cm)</th><th>equivalent threshold (cm&sup2;)</th>"
+      << "<th>accepted</th><th>precision</th><th>recall</th><th>F1</th><th>accepted below "
+      << fixed(100 * options.visibility_cutoff, 0) << "%</th></tr>\n";
+  for (const RadiusRow& radius : t.radius_sweep) {
+    const bool chosen =
+        options.confidence_radius_cm && radius.radius_cm == *options.confidence_radius_cm;
+    out << "<tr" << (chosen ? " style=\"font-weight:bold\"" : "") << "><td>"
+        << general(radius.radius_cm) << "</td><td>" << general(radius.row.threshold_cm2)
+        << "</td><td>" << radius.row.accepted << "</td>" << cell(radius.row.precision)
+        << cell(radius.row.recall) << cell(radius.row.f1) << "<td>"
+        << radius.row.accepted_below_cutoff << "</td></tr>\n";
   }
   out << "</table>\n</section>\n";
 
@@ -644,12 +793,16 @@ bool ThresholdCheckOptions::IsValid(std::string* why) const {
   ThresholdOptions thresholds;
   thresholds.chosen_threshold_cm2 = variance_cm2;
   thresholds.visibility_cutoff = visibility_cutoff;
+  thresholds.chosen_radius_cm = radius_cm;
   if (accurate_cm) thresholds.accurate_cm = *accurate_cm;
   if (!thresholds.IsValid(why)) {
-    // Name this command's option, not the report's.
-    const std::string report_name = "--variance-threshold-cm2";
-    const size_t at = why->find(report_name);
-    if (at != std::string::npos) why->replace(at, report_name.size(), "--variance-cm2");
+    // Name this command's options, not the report's.
+    for (const auto& [report_name, name] :
+         {std::pair<std::string, std::string>{"--variance-threshold-cm2", "--variance-cm2"},
+          {"--confidence-radius-cm", "--radius-cm"}}) {
+      const size_t at = why->find(report_name);
+      if (at != std::string::npos) why->replace(at, report_name.size(), name);
+    }
     return false;
   }
   return true;
@@ -678,7 +831,7 @@ std::string threshold_check(const ThresholdCheckOptions& options) {
     accurate_cm = (*value)["accurate_cm"].get<double>();
   }
   return format_threshold_check(objects, options.variance_cm2, options.visibility_cutoff,
-                                accurate_cm);
+                                accurate_cm, options.radius_cm);
 }
 
 }  // namespace clutterscope::tools::report

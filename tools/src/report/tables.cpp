@@ -1,5 +1,6 @@
 #include <charconv>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/tools/report/calibration.hpp>
 #include <clutterscope/tools/report/tables.hpp>
 #include <cmath>
 #include <fstream>
@@ -39,6 +40,16 @@ std::optional<PoseEstimate> parse_estimate(const CsvTable& table, const CsvRecor
   if (table.has_column("init_err_cm")) {
     estimate.init_err_cm = table.optional_non_negative(record, "init_err_cm");
   }
+  for (const auto& [column, value] :
+       {std::pair<const char*, std::optional<double>*>{"err_x_cm", &estimate.err_x_cm},
+        {"err_y_cm", &estimate.err_y_cm},
+        {"err_z_cm", &estimate.err_z_cm}}) {
+    if (table.has_column(column)) *value = table.optional_number(record, column);
+  }
+  if (table.has_column("nees")) estimate.nees = table.optional_non_negative(record, "nees");
+  if (table.has_column("confident_radius") && !table.text(record, "confident_radius").empty()) {
+    estimate.confident_radius = table.boolean(record, "confident_radius");
+  }
   if (table.has_column("ess_min")) estimate.ess_min = table.optional_number(record, "ess_min");
   if (table.has_column("time_ms")) estimate.time_ms = table.optional_number(record, "time_ms");
   return estimate;
@@ -51,6 +62,8 @@ using Key = std::tuple<std::string, int, int, int>;
 double PoseEstimate::max_variance_cm2() const {
   return std::max(var_x_cm2, std::max(var_y_cm2, var_z_cm2));
 }
+
+double PoseEstimate::radius95_cm() const { return report::radius95_cm(max_variance_cm2()); }
 
 std::string format_number(double value) {
   if (value == 0.0) return "0";  // also folds -0 into 0
@@ -176,7 +189,8 @@ std::string format_objects_csv(const std::vector<ObjectRow>& objects) {
     out << (i ? "," : "") << kVisibilityColumns[i];
   }
   out << ",x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,max_var_cm2,confident,err_cm,"
-         "init_err_cm,ess_min,time_ms\n";
+         "init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,confident_radius,ess_min,time_"
+         "ms\n";
   const auto optional = [](const std::optional<double>& value) {
     return value ? format_number(*value) : std::string();
   };
@@ -192,10 +206,13 @@ std::string format_objects_csv(const std::vector<ObjectRow>& objects) {
           << format_number(e.z_mm) << ',' << format_number(e.var_x_cm2) << ','
           << format_number(e.var_y_cm2) << ',' << format_number(e.var_z_cm2) << ','
           << format_number(e.max_variance_cm2()) << ',' << (e.confident ? 1 : 0) << ','
-          << optional(e.err_cm) << ',' << optional(e.init_err_cm) << ',' << optional(e.ess_min)
-          << ',' << optional(e.time_ms);
+          << optional(e.err_cm) << ',' << optional(e.init_err_cm) << ',' << optional(e.err_x_cm)
+          << ',' << optional(e.err_y_cm) << ',' << optional(e.err_z_cm) << ',' << optional(e.nees)
+          << ',' << format_number(e.radius95_cm()) << ','
+          << (e.confident_radius ? (*e.confident_radius ? "1" : "0") : "") << ','
+          << optional(e.ess_min) << ',' << optional(e.time_ms);
     } else {
-      out << ",,,,,,,,,,,,";
+      out << ",,,,,,,,,,,,,,,,,,";
     }
     out << '\n';
   }

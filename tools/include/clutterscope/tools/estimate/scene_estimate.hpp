@@ -48,6 +48,9 @@ struct EstimateOptions {
   int gibbs_sweeps = 5;               // kappa
   int icp_samples = 20;               // K belief samples refined by ICP
   double variance_threshold_cm2 = 0.25;
+  // The calibrated decision beside the paper's (--confidence-radius-cm): confident iff the 95%
+  // ellipsoid of the fused covariance fits in a sphere of this radius (cm, > 0); unset: not made.
+  std::optional<double> confidence_radius_cm;
   std::uint64_t seed = 1;
   bool keep_history = false;  // belief samples of every iteration (--save-beliefs)
   // Unary (Eq. 6): lambda per metre of summed pixel distance, truncation, and the scoring grid
@@ -67,7 +70,7 @@ struct EstimateOptions {
   double icp_max_distance_m = 0.01;
   // Calibrated covariance (estimator::fused_covariance): depth noise is correlated over about
   // this many pixels of a fit, and the fit's residual is taken at least min_residual_m.
-  double correlated_pixels = 20;
+  double correlated_pixels = 5;
   double min_residual_m = 0.0005;
   double support_z_sigma_m = 0.003;
   double non_contact_floor = 1e-3;

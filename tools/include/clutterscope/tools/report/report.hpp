@@ -5,6 +5,7 @@
 // per-image table), its summary.json (schema: tools/report_summary.schema.json), the HTML
 // report with inline plots, and the files of a report folder.
 
+#include <clutterscope/tools/report/calibration.hpp>
 #include <clutterscope/tools/report/statistics.hpp>
 #include <clutterscope/tools/report/tables.hpp>
 #include <clutterscope/tools/report/thresholds.hpp>
@@ -25,6 +26,7 @@ struct ReportOptions {
   double variance_threshold_cm2 = kPaperVarianceThresholdCm2;  // --variance-threshold-cm2
   double visibility_cutoff = 0.3;                              // --visibility-cutoff
   double min_precision = 0.95;                                 // for the recommended threshold
+  std::optional<double> confidence_radius_cm;                  // --confidence-radius-cm
   BootstrapOptions bootstrap;
   std::uint64_t seed = 1;    // --seed; the bootstrap draws from a stream derived from it
   int images_with_bars = 3;  // per-image visibility bar charts (most cluttered first)
@@ -65,6 +67,17 @@ struct ImageSummary {
   Statistic mean_max_variance_cm2;
 };
 
+// Calibration of the variances (calibration.hpp): coverage of the NEES for all estimates and
+// for the confident ones (max-axis variance <= the report's threshold; with a confidence
+// radius also for those confident by the radius), the final beliefs' ESS quantiles.
+struct CalibrationAnalysis {
+  Coverage all;
+  Coverage confident;
+  std::optional<Coverage> confident_radius;
+  EssQuantiles ess_min;
+  bool has_nees = false;  // false: estimates.csv without the nees column (an earlier version)
+};
+
 struct ReportAnalysis {
   ReportOptions options;
   ReportCounts counts;
@@ -73,6 +86,7 @@ struct ReportAnalysis {
   CorrelationPair error_correlation;     // err_cm vs visibility
   std::vector<VisibilityBand> bands;
   ThresholdAnalysis thresholds;
+  CalibrationAnalysis calibration;
   std::vector<ImageSummary> images;  // in (split, scene, image) order
 };
 
@@ -135,6 +149,7 @@ struct ThresholdCheckOptions {
   double variance_cm2 = kPaperVarianceThresholdCm2;
   double visibility_cutoff = 0.3;
   std::optional<double> accurate_cm;  // default: the report's (summary.json), else 1 cm
+  std::optional<double> radius_cm;    // --radius-cm: the radius decision too
   bool IsValid(std::string* why) const;
 };
 

@@ -24,11 +24,19 @@ struct PoseEstimate {
   bool confident = false;        // as written by the estimator with its threshold
   std::optional<double> err_cm;  // position error against GT, where GT exists
   std::optional<double> init_err_cm;
+  // Calibration (optional columns; estimates.csv of earlier versions lacks them): the error per
+  // support-frame axis (the axes of var_*) and NEES = sum err_a^2 / var_a, empty where not
+  // finite (a zero variance).
+  std::optional<double> err_x_cm, err_y_cm, err_z_cm;
+  std::optional<double> nees;
+  std::optional<bool> confident_radius;  // as written by the estimator with --confidence-radius-cm
   std::optional<double> ess_min;
   std::optional<double> time_ms;
 
   // The variance the threshold is applied to: max over axes, so "max ≤ T" means every axis ≤ T.
   double max_variance_cm2() const;
+  // Largest semi-axis of the 95% ellipsoid: sqrt(chi2_3(0.95) * max_variance_cm2()) (cm).
+  double radius95_cm() const;
 };
 
 // One GT instance with its visibility and, when the estimator produced one, its estimate.
@@ -87,7 +95,8 @@ void join_estimates(std::vector<ObjectRow>& objects, const std::vector<EstimateR
                     const std::filesystem::path& estimates_file);
 
 // The joined table as CSV: the visibility columns, then x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,
-// var_z_cm2,max_var_cm2,confident,err_cm,init_err_cm,ess_min,time_ms (empty when absent).
+// var_z_cm2,max_var_cm2,confident,err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,
+// radius95_cm,confident_radius,ess_min,time_ms (empty when absent).
 // Numbers use the shortest round-trip form, so reading and writing again gives equal bytes.
 std::string format_objects_csv(const std::vector<ObjectRow>& objects);
 

@@ -7,6 +7,7 @@
 
 #include <clutterscope/tools/report/statistics.hpp>
 #include <clutterscope/tools/report/tables.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,12 +24,22 @@ struct ThresholdOptions {
   double visibility_cutoff = 0.3;
   double chosen_threshold_cm2 = kPaperVarianceThresholdCm2;  // --variance-threshold-cm2
   double min_precision = 0.95;                               // for the recommended threshold
+  // The calibrated decision beside the paper's: confident iff the 95% ellipsoid fits in a
+  // sphere of radius R, swept log-spaced over [radius_sweep_min_cm, radius_sweep_max_cm].
+  double radius_sweep_min_cm = 0.1;
+  double radius_sweep_max_cm = 10.0;
+  std::optional<double> chosen_radius_cm;  // --confidence-radius-cm
   bool IsValid(std::string* why) const;
 };
 
 // Log-spaced thresholds from sweep_min to sweep_max (both included), plus the paper's
 // 0.25 cm^2 and the chosen threshold exactly, sorted and without duplicates.
 std::vector<double> sweep_thresholds(const ThresholdOptions& options);
+
+// The radius sweep, log-spaced like sweep_thresholds() over [radius_sweep_min_cm,
+// radius_sweep_max_cm], plus exactly the radius equivalent to the chosen variance threshold
+// (sqrt(chi2_3(0.95) T)) and the chosen radius.
+std::vector<double> sweep_radii(const ThresholdOptions& options);
 
 struct ThresholdRow {
   double threshold_cm2 = 0.0;
@@ -46,6 +57,16 @@ struct ThresholdRow {
 // Evaluates one threshold over the objects with an estimate and an error.
 ThresholdRow evaluate_threshold(const std::vector<ObjectRow>& objects, double threshold_cm2,
                                 double accurate_cm, double visibility_cutoff);
+
+// Evaluates the radius decision (radius95_cm <= radius_cm, calibration.hpp) like
+// evaluate_threshold(); the row's threshold_cm2 is the equivalent variance threshold
+// R^2 / chi2_3(0.95).
+struct RadiusRow {
+  double radius_cm = 0.0;
+  ThresholdRow row;
+};
+RadiusRow evaluate_radius(const std::vector<ObjectRow>& objects, double radius_cm,
+                          double accurate_cm, double visibility_cutoff);
 
 struct ThresholdRecommendation {
   Statistic largest_with_min_precision;  // largest swept T with precision >= min_precision
@@ -68,6 +89,10 @@ struct ThresholdAnalysis {
   ThresholdRecommendation recommendation;
   ThresholdRow chosen;               // the chosen threshold's row
   std::vector<CutoffRow> by_cutoff;  // chosen threshold at cutoffs 0.1, 0.2, ..., 0.9
+  std::vector<RadiusRow> radius_sweep;
+  // Largest swept radius with precision >= min_precision, the F1 optimum (in cm).
+  ThresholdRecommendation radius_recommendation;
+  std::optional<RadiusRow> chosen_radius;  // with options.chosen_radius_cm
 };
 
 ThresholdRecommendation recommend_threshold(const std::vector<ThresholdRow>& sweep,
@@ -83,8 +108,10 @@ ThresholdAnalysis analyse_thresholds(const std::vector<ObjectRow>& objects,
 
 // The text printed by `clutterscope thresholds DIR --variance-cm2 T [--visibility-cutoff C]`:
 // precision, recall, F1 and acceptance below the cutoff for T, then the converse table over
-// cutoffs 0.1 .. 0.9. Undefined values print as "n/a (reason)".
+// cutoffs 0.1 .. 0.9. Undefined values print as "n/a (reason)". With `radius_cm` the radius
+// decision's precision, recall, F1 and acceptance follow.
 std::string format_threshold_check(const std::vector<ObjectRow>& objects, double threshold_cm2,
-                                   double visibility_cutoff, double accurate_cm);
+                                   double visibility_cutoff, double accurate_cm,
+                                   std::optional<double> radius_cm = std::nullopt);
 
 }  // namespace clutterscope::tools::report
