@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 namespace clutterscope::estimator {
 
@@ -40,22 +41,51 @@ SeparatingAxes::SeparatingAxes(const Eigen::Vector3d& extent_s, const Eigen::Vec
 }
 
 SeparatingAxes::SeparatingAxes(const Eigen::Matrix3d& rotation_s, const Eigen::Vector3d& extent_s,
-                               const Eigen::Matrix3d& rotation_t, const Eigen::Vector3d& extent_t)
-    : axes_(15, 3), radii_(15) {
+                               const Eigen::Matrix3d& rotation_t, const Eigen::Vector3d& extent_t) {
   check_box(rotation_s, extent_s);
   check_box(rotation_t, extent_t);
   const Eigen::Vector3d a = 0.5 * extent_s, b = 0.5 * extent_t;
-  for (int i = 0; i < 3; ++i) {
-    axes_.row(i) = rotation_s.col(i).transpose();
-    axes_.row(3 + i) = rotation_t.col(i).transpose();
-    for (int j = 0; j < 3; ++j)
-      axes_.row(6 + 3 * i + j) = rotation_s.col(i).cross(rotation_t.col(j)).transpose();
+  std::vector<Eigen::Vector3d> kept_axes;
+  std::vector<double> kept_radii;
+  // Candidate k: the face normals (k < 6), then the edge cross products.
+  for (int k = 0; k < 15; ++k) {
+    const Eigen::Vector3d axis =
+        k < 3   ? Eigen::Vector3d(rotation_s.col(k))
+        : k < 6 ? Eigen::Vector3d(rotation_t.col(k - 3))
+                : Eigen::Vector3d(rotation_s.col((k - 6) / 3).cross(rotation_t.col((k - 6) % 3)));
+    // Projection radii of the boxes: |L . A_i| = |(R_s^T L)_i|.
+    double radius = (rotation_s.transpose() * axis).cwiseAbs().dot(a) +
+                    (rotation_t.transpose() * axis).cwiseAbs().dot(b);
+    const double length = axis.norm();
+    if (k >= 6) {
+      radius += kParallelEdgeEpsilon * (a.sum() + b.sum());
+      // (Nearly) parallel edges: with |L| <= epsilon / 2 the guard makes this axis need
+      // |L . d| / |L| > 2 (sum a + sum b), and beyond sum a + sqrt(3) sum b a face normal of s
+      // separates already (|d . L| <= sum_i |d . A_i| |A_i . L| / |L|): dropping it changes
+      // no answer.
+      if (!(length > 0.5 * kParallelEdgeEpsilon)) continue;
+    }
+    // Unit axes, so that a parallel duplicate (every cross product of two upright boxes' edges
+    // is vertical or horizontal) is found and only its tighter radius kept.
+    const Eigen::Vector3d unit = axis / length;
+    radius /= length;
+    bool duplicate = false;
+    for (std::size_t m = 0; m < kept_axes.size() && !duplicate; ++m) {
+      if (std::abs(kept_axes[m].dot(unit)) >= 1 - 1e-15) {
+        kept_radii[m] = std::min(kept_radii[m], radius);
+        duplicate = true;
+      }
+    }
+    if (duplicate) continue;
+    kept_axes.push_back(unit);
+    kept_radii.push_back(radius);
   }
-  // Projection radii of the boxes on each axis: |L . A_i| = |(R_s^T L)_i|.
-  const Eigen::Matrix<double, Eigen::Dynamic, 3> on_s = (axes_ * rotation_s).cwiseAbs();
-  const Eigen::Matrix<double, Eigen::Dynamic, 3> on_t = (axes_ * rotation_t).cwiseAbs();
-  radii_ = on_s * a + on_t * b;
-  radii_.tail(9).array() += kParallelEdgeEpsilon * (a.sum() + b.sum());
+  axes_.resize(static_cast<Eigen::Index>(kept_axes.size()), 3);
+  radii_.resize(static_cast<Eigen::Index>(kept_axes.size()));
+  for (std::size_t m = 0; m < kept_axes.size(); ++m) {
+    axes_.row(static_cast<Eigen::Index>(m)) = kept_axes[m].transpose();
+    radii_[static_cast<Eigen::Index>(m)] = kept_radii[m];
+  }
 }
 
 bool SeparatingAxes::separated(const Eigen::Vector3d& offset) const {
@@ -137,21 +167,21 @@ void NonContactPotential::log_factor(EdgeDirection, const Eigen::MatrixXd& point
                                      const Eigen::MatrixXd& neighbour,
                                      const Eigen::VectorXd& weights,
                                      Eigen::VectorXd* log_values) const {
-  // Project both sample sets on the edge's axes once; a pair is then K subtractions.
-  const Eigen::ArrayXXd projected_points = (axes_.axes() * points).array();
-  const Eigen::ArrayXXd projected_neighbour = (axes_.axes() * neighbour).array();
-  const Eigen::ArrayXd radii = axes_.radii().array();
+  // Project both sample sets on the edge's axes once (column k: the projections on axis k);
+  // a pair is then K subtractions, vectorised over the neighbour's samples.
+  const Eigen::MatrixXd projected_points = points.transpose() * axes_.axes().transpose();
+  const Eigen::MatrixXd projected_neighbour = neighbour.transpose() * axes_.axes().transpose();
+  const Eigen::VectorXd& radii = axes_.radii();
   const Eigen::ArrayXd w = weights.array();
   log_values->resize(points.cols());
+  Eigen::ArrayXd gap(neighbour.cols());
   for (int i = 0; i < points.cols(); ++i) {
-    // Weighted count of neighbour samples separated along some axis (vectorised over them).
-    const double free_fraction =
-        ((((projected_neighbour.colwise() - projected_points.col(i)).abs().colwise() - radii)
-              .colwise()
-              .maxCoeff() > 0)
-             .transpose())
-            .select(w, 0.0)
-            .sum();
+    // The largest gap |L_k . d| - r_k of each pair (> 0: separated), and the weighted count of
+    // the neighbour's samples separated from point i.
+    gap = (projected_neighbour.col(0).array() - projected_points(i, 0)).abs() - radii[0];
+    for (int k = 1; k < radii.size(); ++k)
+      gap = gap.max((projected_neighbour.col(k).array() - projected_points(i, k)).abs() - radii[k]);
+    const double free_fraction = (gap > 0).select(w, 0.0).sum();
     (*log_values)[i] = std::log(std::max(free_fraction, floor_));
   }
 }

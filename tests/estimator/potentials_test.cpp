@@ -117,9 +117,14 @@ Box random_box(std::mt19937_64& rng, double spread) {
 
 TEST(Potentials, OrientedNonContactAgreesWithBruteForceOverlap) {
   std::mt19937_64 rng(20261201);
+  std::uniform_real_distribution<double> yaw(-kPi, kPi);
   int separated = 0, touching = 0, sampled_inside = 0;
-  for (int trial = 0; trial < 3000; ++trial) {
-    const Box s = random_box(rng, 0.15), t = random_box(rng, 0.15);
+  for (int trial = 0; trial < 6000; ++trial) {
+    Box s = random_box(rng, 0.15), t = random_box(rng, 0.15);
+    if (trial % 2) {  // upright, as generated objects stand: parallel vertical edges
+      s.rotation = about_z(yaw(rng));
+      t.rotation = about_z(yaw(rng));
+    }
     const bool intersect = boxes_intersect(s, t);
     ASSERT_EQ(oriented(s, t), !intersect) << "trial " << trial;
     // A sample point of one inside the other proves contact.
@@ -130,8 +135,8 @@ TEST(Potentials, OrientedNonContactAgreesWithBruteForceOverlap) {
     (intersect ? touching : separated) += 1;
   }
   // Both answers occur often, and the point samples alone miss some contacts (edge crossings).
-  EXPECT_GT(separated, 500);
-  EXPECT_GT(touching, 500);
+  EXPECT_GT(separated, 1000);
+  EXPECT_GT(touching, 1000);
   EXPECT_LT(sampled_inside, touching);
 }
 
@@ -158,6 +163,15 @@ TEST(Potentials, OrientedNonContactKnownCases) {
     EXPECT_FALSE(non_contact(origin, d * diagonal, aabb, aabb)) << d;
   }
   EXPECT_FALSE(non_contact_oriented(origin, (0.1 - kEps) * diagonal, quarter, quarter, cube, cube));
+  // Two upright boxes: the vertical axis and the four horizontal face normals are all the
+  // distinct axes; random rotations need all 15.
+  EXPECT_EQ(SeparatingAxes(about_z(0.3), cube, about_z(1.1), Eigen::Vector3d(0.2, 0.02, 0.03))
+                .axes()
+                .rows(),
+            5);
+  std::mt19937_64 rng(5);
+  EXPECT_EQ(SeparatingAxes(random_rotation(rng), cube, random_rotation(rng), cube).axes().rows(),
+            15);
   // The rotation maps box axes to the support frame: a bar along its x turned 90 degrees about
   // z lies along the support frame's y.
   const Eigen::Vector3d bar(0.2, 0.02, 0.02), small(0.01, 0.01, 0.01);

@@ -31,16 +31,19 @@ bool non_contact_oriented(const Eigen::Vector3d& xs, const Eigen::Vector3d& xt,
                           const Eigen::Vector3d& extent_s, const Eigen::Vector3d& extent_t);
 
 // The candidate separating axes of two boxes whose rotations and sizes are fixed while their
-// offset d = xs - xt varies (every sample pair of a non-contact edge): axes L_k (support frame)
-// and radii r_k = sum_i a_i |L_k . A_i| + sum_j b_j |L_k . B_j| (a, b half sizes, A_i, B_j the
-// boxes' axes), so that the boxes are separated iff |L_k . d| > r_k for some k.
+// offset d = xs - xt varies (every sample pair of a non-contact edge): unit axes L_k (support
+// frame) and radii r_k = sum_i a_i |L_k . A_i| + sum_j b_j |L_k . B_j| (a, b half sizes, A_i,
+// B_j the boxes' axes), so that the boxes are separated iff |L_k . d| > r_k for some k.
 //  - axis-aligned (Eq. 7 as the paper writes it): L = the support frame's x, y, z, r = the half
 //    sums of the extents;
 //  - oriented: the 15 axes of the separating axis theorem for 3-D boxes, A_i, B_j and
 //    A_i x B_j. A cross product of (nearly) parallel edges vanishes, and |L . d| and r are then
-//    both rounding noise: its radius gets kParallelEdgeEpsilon * (sum a + sum b) more (Ericsson,
-//    Real-Time Collision Detection, 4.4.1), so no false separation comes of it. Touching boxes
-//    are in contact, as in Eq. 7's strict inequality.
+//    both rounding noise: its radius gets kParallelEdgeEpsilon * (sum a + sum b) more before
+//    L is normalised (Ericsson, Real-Time Collision Detection, 4.4.1), so no false separation
+//    comes of it; such axes with |A_i x B_j| <= kParallelEdgeEpsilon / 2 are dropped (the guard
+//    leaves them nothing to decide), and of parallel duplicates only the tightest is kept, so
+//    two upright boxes need 5 axes instead of 15. Touching boxes are in contact, as in Eq. 7's
+//    strict inequality.
 class SeparatingAxes {
  public:
   static constexpr double kParallelEdgeEpsilon = 1e-9;
@@ -50,7 +53,7 @@ class SeparatingAxes {
                  const Eigen::Matrix3d& rotation_t, const Eigen::Vector3d& extent_t);
 
   bool separated(const Eigen::Vector3d& offset) const;  // offset = xs - xt, either sign
-  const Eigen::Matrix<double, Eigen::Dynamic, 3>& axes() const { return axes_; }  // rows L_k
+  const Eigen::Matrix<double, Eigen::Dynamic, 3>& axes() const { return axes_; }  // rows: L_k
   const Eigen::VectorXd& radii() const { return radii_; }
 
  private:
