@@ -295,6 +295,39 @@ TEST_F(EstimateGl, ThresholdMustBePositive) {
   EXPECT_NE(result.output.find("--variance-threshold-cm2"), std::string::npos) << result.output;
 }
 
+TEST_F(EstimateGl, NonContactFormAndAblationOptionsChangeTheMrfAndAreRecorded) {
+  const fs::path bad = fresh_dir("estimate_non_contact_bad");
+  const CommandRun refused = run_merged("estimate " + dataset_->string() + " --out " +
+                                        bad.string() + " --non-contact box" + kFast);
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("--non-contact"), std::string::npos) << refused.output;
+  std::map<std::string, std::string> estimates;
+  for (const auto& [name, options] : std::vector<std::pair<std::string, std::string>>{
+           {"oriented", ""},
+           {"aabb", " --non-contact aabb"},
+           {"no_non_contact", " --no-non-contact-edges"},
+           {"aabb_no_non_contact", " --non-contact aabb --no-non-contact-edges"},
+           {"no_support", " --no-support-edges"}}) {
+    const fs::path out = fresh_dir("estimate_non_contact_" + name);
+    const CommandRun run = run_merged("estimate " + dataset_->string() + " --out " + out.string() +
+                                      " --no-time" + options + kFast);
+    ASSERT_EQ(run.exit_code, 0) << name << ":\n" << run.output;
+    estimates[name] = read_file(out / "estimates.csv");
+    const nlohmann::json summary = nlohmann::json::parse(read_file(out / "summary.json"));
+    const nlohmann::json& recorded = summary.at("options");
+    EXPECT_EQ(recorded.at("non_contact"), name.rfind("aabb", 0) == 0 ? "aabb" : "oriented") << name;
+    EXPECT_EQ(recorded.contains("non_contact_edges"),
+              name.find("no_non_contact") != std::string::npos)
+        << name;
+    EXPECT_EQ(recorded.contains("support_edges"), name == "no_support") << name;
+  }
+  // The form of Eq. 7 changes the estimates here; without the edges it no longer does.
+  EXPECT_NE(estimates["oriented"], estimates["aabb"]);
+  EXPECT_NE(estimates["aabb"], estimates["aabb_no_non_contact"]);
+  EXPECT_EQ(estimates["aabb_no_non_contact"], estimates["no_non_contact"]);
+  EXPECT_NE(estimates["oriented"], estimates["no_support"]);
+}
+
 // A copy of the dataset for corrupting.
 fs::path copy_dataset(const fs::path& from, const std::string& name) {
   const fs::path to = fresh_dir(name);
@@ -380,9 +413,8 @@ TEST_F(EstimateGl, WithoutGraphAndDepthInfersTheGraphAndSimulatesTheSensor) {
     fs::remove_all(data / "test" / scene / "depth");
   }
   const fs::path out = fresh_dir("estimate_bare_out");
-  const CommandRun result =
-      run_merged("estimate " + data.string() + " --out " + out.string() +
-                 " --observation synthetic" + kFast);
+  const CommandRun result = run_merged("estimate " + data.string() + " --out " + out.string() +
+                                       " --observation synthetic" + kFast);
   ASSERT_EQ(result.exit_code, 0) << result.output;
   const nlohmann::json counts = nlohmann::json::parse(read_file(out / "summary.json")).at("counts");
   EXPECT_EQ(counts.at("images_with_inferred_graph"), 2);

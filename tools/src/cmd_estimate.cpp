@@ -14,6 +14,7 @@
 #include <clutterscope/tools/formats.hpp>
 #include <clutterscope/tools/report/calibration.hpp>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -367,6 +368,15 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
   job.fingerprint["proxy_tolerance_mm"] = 1e3 * e.proxy_tolerance_m;
   job.fingerprint["bandwidth_floor_mm"] = 1e3 * e.min_bandwidth_m;
   job.fingerprint["icp_max_distance_mm"] = 1e3 * e.icp_max_distance_m;
+  // Always recorded: folders of earlier runs, which used aabb without saying so, do not resume.
+  job.fingerprint["non_contact"] = to_string(e.non_contact);
+  if (!e.non_contact_edges) job.fingerprint["non_contact_edges"] = false;
+  if (!e.support_edges) job.fingerprint["support_edges"] = false;
+  // The belief proposal and covariance of this version: always recorded, so that folders of
+  // earlier estimators (untempered product proposals, spread-only variances) do not resume.
+  job.fingerprint["belief_proposal"] = e.adaptive_belief_proposal ? "adaptive" : "product";
+  job.fingerprint["min_ess_fraction"] = e.min_effective_sample_fraction;
+  job.fingerprint["correlated_pixels"] = e.correlated_pixels;
   // Defaults add nothing, so that folders of earlier runs keep resuming.
   if (e.observation == Observation::kSynthetic) {
     job.fingerprint["observation"] = to_string(e.observation);
@@ -451,6 +461,23 @@ void add_estimator_options(CLI::App& command, EstimateOptions& e) {
           "synthetic: depth synthesised from the GT render through the sensor model")
       ->check(CLI::IsMember({"measured", "synthetic"}));
   add_depth_check_options(command, &e.depth);
+  command
+      .add_option_function<std::string>(
+          "--non-contact",
+          [&e](const std::string& name) {
+            e.non_contact =
+                name == "aabb" ? NonContactForm::kAxisAligned : NonContactForm::kOriented;
+          },
+          "boxes of the non-contact test (Eq. 7): oriented (default): each object's model box "
+          "with its orientation; aabb: the paper's boxes aligned to the support frame")
+      ->check(CLI::IsMember({"oriented", "aabb"}));
+  command.add_flag_function(
+      "--no-non-contact-edges", [&e](std::int64_t) { e.non_contact_edges = false; },
+      "for ablation studies: build the MRF without the scene graph's non-contact edges");
+  command.add_flag_function(
+      "--no-support-edges", [&e](std::int64_t) { e.support_edges = false; },
+      "for ablation studies: build the MRF without the scene graph's support edges (and "
+      "without the fixed support nodes they would attach)");
 }
 
 void add_estimate_command(CLI::App& app, int* exit_code) {

@@ -176,6 +176,10 @@ std::string to_string(Observation observation) {
   return observation == Observation::kMeasured ? "measured" : "synthetic";
 }
 
+std::string to_string(NonContactForm form) {
+  return form == NonContactForm::kOriented ? "oriented" : "aabb";
+}
+
 render::ModelCacheOptions EstimateOptions::model_cache() const {
   render::ModelCacheOptions cache;
   cache.proxy_triangles = static_cast<std::size_t>(proxy_triangles);
@@ -445,7 +449,7 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
   // Fixed supports that support a hidden node: a node at the support surface, so that Eq. 8
   // puts children on the tray's floor (not on its rim, the top of its bounding box).
   for (const auto& [parent, child] : support) {
-    if (!is_fixed[static_cast<std::size_t>(parent)] ||
+    if (!options.support_edges || !is_fixed[static_cast<std::size_t>(parent)] ||
         node_of[static_cast<std::size_t>(child)] < 0 ||
         node_of[static_cast<std::size_t>(parent)] >= 0)
       continue;
@@ -465,19 +469,32 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
   for (const auto& [parent, child] : support) {
     const int a = node_of[static_cast<std::size_t>(parent)],
               b = node_of[static_cast<std::size_t>(child)];
-    if (a < 0 || b < 0 || (mrf.nodes[a].fixed && mrf.nodes[b].fixed)) continue;
+    if (!options.support_edges || a < 0 || b < 0 || (mrf.nodes[a].fixed && mrf.nodes[b].fixed))
+      continue;
     mrf.edges.push_back({a, b,
                          std::make_shared<estimator::SupportPotential>(
                              extent[parent], extent[child], options.support_z_sigma_m)});
   }
   for (const auto& [first, second] : graph.non_contact) {
-    if (first < 0 || first >= n || second < 0 || second >= n) continue;
+    if (!options.non_contact_edges || first < 0 || first >= n || second < 0 || second >= n)
+      continue;
     const int a = node_of[static_cast<std::size_t>(first)],
               b = node_of[static_cast<std::size_t>(second)];
     if (a < 0 || b < 0 || (mrf.nodes[a].fixed && mrf.nodes[b].fixed)) continue;
+    // Oriented: the model boxes (centred on the node position) rotated model -> support frame.
+    const auto rotation = [&](int i) {
+      return Eigen::Matrix3d((camera_to_support * view.objects[i].model_to_camera).linear());
+    };
+    const auto size = [&](int i) -> const Eigen::Vector3d& {
+      return s.dataset.model(view.objects[i].obj_id).size;
+    };
     mrf.edges.push_back({a, b,
-                         std::make_shared<estimator::NonContactPotential>(
-                             extent[first], extent[second], options.non_contact_floor)});
+                         options.non_contact == NonContactForm::kOriented
+                             ? std::make_shared<estimator::NonContactPotential>(
+                                   rotation(first), size(first), rotation(second), size(second),
+                                   options.non_contact_floor)
+                             : std::make_shared<estimator::NonContactPotential>(
+                                   extent[first], extent[second], options.non_contact_floor)});
   }
 
   // NBP.

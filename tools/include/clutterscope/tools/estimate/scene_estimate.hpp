@@ -40,6 +40,12 @@ enum class Observation { kMeasured, kSynthetic };
 
 std::string to_string(Observation observation);  // "measured", "synthetic"
 
+// The boxes of Eq. 7's non-contact test: each object's model box with its orientation (from the
+// GT, fixed per node), or the paper's boxes aligned to the support frame.
+enum class NonContactForm { kOriented, kAxisAligned };
+
+std::string to_string(NonContactForm form);  // "oriented", "aabb"
+
 struct EstimateOptions {
   Observation observation = Observation::kMeasured;
   datasets::DepthCheckOptions depth;  // measured observations: --depth-scale, --no-depth-check
@@ -80,6 +86,10 @@ struct EstimateOptions {
   // min_bandwidth_m so that beliefs can become as sharp as the unary.
   bool adaptive_belief_proposal = true;
   double proposal_min_bandwidth_m = 0.0005;
+  NonContactForm non_contact = NonContactForm::kOriented;
+  // Ablation studies: the MRF without the scene graph's non-contact or support edges.
+  bool non_contact_edges = true;
+  bool support_edges = true;
   double min_bandwidth_m =
       0.005;  // floor of the kernel standard deviation: keeps the K ICP starts apart
   bool IsValid(std::string* why) const;
