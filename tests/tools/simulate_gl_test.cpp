@@ -85,7 +85,7 @@ void check_outputs(const fs::path& out, const nlohmann::json& summary) {
   EXPECT_EQ(summary.at("left").size(), summary.at("objects_left").get<std::size_t>());
 }
 
-TEST(SimulateGl, Tray10PaperThresholdEmptiesTheTrayAndLooserOneFails) {
+TEST(SimulateGl, Tray10PaperThresholdEmptiesTheTrayAndALooserOneIsCompared) {
   std::string why;
   if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
   const fs::path out = testing::fresh_dir("simulate_tray10");
@@ -119,8 +119,11 @@ TEST(SimulateGl, Tray10PaperThresholdEmptiesTheTrayAndLooserOneFails) {
   check_outputs(out / "compare" / "threshold_25", loose);
   const int loose_failures = loose.at("failed_picks").get<int>();
   const int loose_rounds = loose.at("rounds").get<int>();
-  EXPECT_TRUE(loose_failures > 0 || loose_rounds > paper.at("rounds").get<int>()) << loose.dump(2);
-  EXPECT_LT(paper.at("failed_picks").get<int>(), loose_failures);
+  // A looser threshold accepts at least what the paper's accepts in each round, so it needs no
+  // more rounds; whether it also picks wrongly depends on the estimates (with the calibrated
+  // covariance tray10 has no confident estimate off by 2 cm even at 25 cm^2; with the earlier
+  // spread-only variances it had). Its failures, if any, are logged as such.
+  EXPECT_LE(loose_rounds, paper.at("rounds").get<int>()) << loose.dump(2);
   // Logged: every failure is a confident estimate off by more than the 2 cm tolerance.
   for (const auto& failure : loose.at("failures")) {
     EXPECT_GT(failure.at("err_cm").get<double>(), 2.0) << failure.dump();

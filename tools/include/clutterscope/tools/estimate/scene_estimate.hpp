@@ -76,7 +76,7 @@ struct EstimateOptions {
   double icp_max_distance_m = 0.01;
   // Calibrated covariance (estimator::fused_covariance): depth noise is correlated over about
   // this many pixels of a fit, and the fit's residual is taken at least min_residual_m.
-  double correlated_pixels = 5;
+  double correlated_pixels = 3;
   double min_residual_m = 0.0005;
   double support_z_sigma_m = 0.003;
   double non_contact_floor = 1e-3;
