@@ -52,6 +52,16 @@ bool DetectorOptions::IsValid(std::string* why) const {
   if (!(false_positives_per_image >= 0)) {
     return fail("detector false positives per image must be >= 0");
   }
+  if (amodal_boxes) {
+    if (!(amodal_score > 0 && amodal_score < score_at_zero_visibility)) {
+      return fail("detector amodal score must be in (0, score at zero visibility = " +
+                  std::to_string(score_at_zero_visibility) + "), got " +
+                  std::to_string(amodal_score));
+    }
+    if (!(amodal_jitter >= 0) || !std::isfinite(amodal_jitter)) {
+      return fail("detector amodal box jitter must be a finite number >= 0");
+    }
+  }
   return true;
 }
 
@@ -78,6 +88,8 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
   }
   std::normal_distribution<double> gaussian(0.0, 1.0);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
+  // Visible detections score above every amodal box (clamped to at least one step above it).
+  const double min_score = options.amodal_boxes ? std::max(0.01, options.amodal_score + 1e-4) : 0.01;
   std::vector<Detection> detections;
   for (int i = 0; i < n; ++i) {
     if (instances[i].fixed || visible[i] < options.min_visible_px) continue;
@@ -90,7 +102,7 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
     const double score = options.score_at_zero_visibility +
                          (1.0 - options.score_at_zero_visibility) * visibility +
                          options.score_noise * gaussian(rng);
-    detection.score = round_to(std::clamp(score, 0.01, 1.0), 1e-4);
+    detection.score = round_to(std::clamp(score, min_score, 1.0), 1e-4);
     // bop_toolkit's bbox: [xmin, ymin, xmax - xmin, ymax - ymin].
     detection.bbox =
         jittered_box(x0[i], y0[i], x1[i], y1[i], options.box_jitter, labels.cols, labels.rows, rng);
@@ -115,6 +127,21 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
       const double h = (0.05 + 0.15 * unit(rng)) * labels.rows;
       const double x = unit(rng) * (labels.cols - w), y = unit(rng) * (labels.rows - h);
       detection.bbox = jittered_box(x, y, x + w, y + h, 0.0, labels.cols, labels.rows, rng);
+      detections.push_back(detection);
+    }
+  }
+  // Amodal boxes last: the draws above are those of a detector without them.
+  if (options.amodal_boxes) {
+    for (int i = 0; i < n; ++i) {
+      const cv::Rect& silhouette = instances[i].silhouette_bbox;
+      if (instances[i].fixed || visible[i] >= options.min_visible_px || silhouette.empty()) continue;
+      Detection detection;
+      detection.obj_id = instances[i].obj_id;
+      detection.score = round_to(options.amodal_score, 1e-4);
+      detection.bbox = jittered_box(silhouette.x, silhouette.y, silhouette.x + silhouette.width - 1,
+                                    silhouette.y + silhouette.height - 1, options.amodal_jitter,
+                                    labels.cols, labels.rows, rng);
+      detection.amodal = true;
       detections.push_back(detection);
     }
   }

@@ -22,6 +22,7 @@
 #include "commands.hpp"
 #include "dataset_options.hpp"
 #include "depth_options.hpp"
+#include "generate_pipeline.hpp"
 #include "input_digest.hpp"
 
 namespace clutterscope::tools {
@@ -323,6 +324,13 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
   job.fingerprint["bandwidth_floor_mm"] = 1e3 * e.min_bandwidth_m;
   job.fingerprint["icp_max_distance_mm"] = 1e3 * e.icp_max_distance_m;
   // Defaults add nothing, so that folders of earlier runs keep resuming.
+  const datasets::DetectorOptions default_detector;
+  if (!e.detector.amodal_boxes) job.fingerprint["amodal_boxes"] = false;
+  if (e.detector.amodal_score != default_detector.amodal_score)
+    job.fingerprint["amodal_score"] = e.detector.amodal_score;
+  if (e.detector.amodal_jitter != default_detector.amodal_jitter)
+    job.fingerprint["amodal_jitter"] = e.detector.amodal_jitter;
+  if (e.amodal_below_score) job.fingerprint["amodal_below_score"] = *e.amodal_below_score;
   if (e.observation == Observation::kSynthetic) {
     job.fingerprint["observation"] = to_string(e.observation);
   } else {
@@ -402,6 +410,11 @@ void add_estimate_command(CLI::App& app, int* exit_code) {
           "synthetic: depth synthesised from the GT render through the sensor model")
       ->check(CLI::IsMember({"measured", "synthetic"}));
   add_depth_check_options(*command, &e.depth);
+  add_amodal_options(*command, &e.detector);
+  command->add_option_function<double>(
+      "--amodal-below-score", [&e](double score) { e.amodal_below_score = score; },
+      "with --detections: estimate an object whose every box scores below this as hidden (its "
+      "boxes amodal), as the synthetic detector's amodal boxes are");
   command->add_flag("--save-beliefs", arguments->save_beliefs,
                     "also write the belief samples of every iteration (camera frame, mm)");
   command->add_flag("--no-time", arguments->no_time,

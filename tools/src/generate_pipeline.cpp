@@ -198,7 +198,10 @@ nlohmann::json GenerateOptions::to_json() const {
                       {"score_at_zero_visibility", detector.score_at_zero_visibility},
                       {"score_noise", detector.score_noise},
                       {"duplicate_probability", detector.duplicate_probability},
-                      {"false_positives_per_image", detector.false_positives_per_image}};
+                      {"false_positives_per_image", detector.false_positives_per_image},
+                      {"amodal_boxes", detector.amodal_boxes},
+                      {"amodal_score", detector.amodal_score},
+                      {"amodal_jitter", detector.amodal_jitter}};
   json["sensor"] = datasets::to_json(sensor);
   json["clutterscope_version"] = CLUTTERSCOPE_VERSION;
   return json;
@@ -317,6 +320,7 @@ GenerateSummary write_dataset(const GenerateOptions& options,
           renderer.count_visibility(intrinsics, instances);
       for (std::size_t i = 0; i < scene.objects.size(); ++i) {
         detector_instances[i].silhouette_px = counts[i].silhouette_px;
+        detector_instances[i].silhouette_bbox = counts[i].silhouette_bbox;
         if (scene.objects[i].fixed) continue;
         ++summary.objects;
         if (counts[i].visible_px == 0) {

@@ -19,6 +19,7 @@
 #include <chrono>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/depth_check.hpp>
+#include <clutterscope/datasets/detector.hpp>
 #include <clutterscope/datasets/scene.hpp>
 #include <clutterscope/estimator/mixture.hpp>
 #include <clutterscope/estimator/nbp.hpp>
@@ -69,6 +70,18 @@ struct EstimateOptions {
   double non_contact_floor = 1e-3;
   double min_bandwidth_m =
       0.005;  // floor of the kernel standard deviation: keeps the K ICP starts apart
+  // The synthetic detector (no attached detections): boxes of the visible pixels, and the
+  // amodal box of every completely hidden object (DetectorOptions::amodal_boxes).
+  datasets::DetectorOptions detector;
+  // Attached detections do not say which boxes are amodal: with a value, an object whose every
+  // box scores below it is estimated as hidden, like one with the synthetic detector's amodal
+  // boxes (--amodal-below-score).
+  std::optional<double> amodal_below_score;
+  // Hidden objects: the unary compares the hypothesis's projected silhouette box with the
+  // amodal box, each edge with sigma = amodal_box_sigma * box size; the initial mixture lies up
+  // to amodal_depth_span object diagonals behind the surface seen in the box.
+  double amodal_box_sigma = 0.05;
+  double amodal_depth_span = 2.0;
   bool IsValid(std::string* why) const;
   // The estimator's models: proxies for the unary, CPU meshes for ICP.
   render::ModelCacheOptions model_cache() const;
@@ -92,6 +105,10 @@ struct ObjectEstimate {
   double effective_sample_size = 0;                // of the final belief's weights
   // Eq. 10 visibility of the GT instance (visible / silhouette pixels), for evaluation only.
   std::optional<double> visibility;
+  // Estimated as hidden (its detections are amodal boxes): the unary compares silhouette boxes,
+  // the depth in its box (an occluder's) is not fitted, and the estimate is the belief's mean
+  // and spread without ICP.
+  bool amodal = false;
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();       // model to camera (from the GT)
   Eigen::Vector3d model_translation = Eigen::Vector3d::Zero();  // BOP t (metres)
   std::vector<std::vector<BeliefSample>> beliefs;               // [iteration] with keep_history
