@@ -17,7 +17,7 @@ cv::Mat label_image() {
 }
 
 std::vector<DetectorInstance> instances() {
-  return {{1, 400, false}, {2, 400, false}, {3, 300, false}, {16, 10000, true}};
+  return {{1, 400, false, {}}, {2, 400, false, {}}, {3, 300, false, {}}, {16, 10000, true, {}}};
 }
 
 TEST(Detector, BoxesOfVisiblePixelsAndScoresFallingWithVisibility) {

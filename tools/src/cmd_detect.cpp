@@ -76,7 +76,7 @@ void run_detect(const DetectArguments& arguments) {
                            static_cast<std::uint32_t>(i + 1)});
       const bool is_fixed =
           std::find(fixed.begin(), fixed.end(), static_cast<int>(i)) != fixed.end();
-      detector_instances.push_back({obj_id, 0, is_fixed});
+      detector_instances.push_back({obj_id, 0, is_fixed, {}});
     }
     const render::Intrinsics intrinsics = render::Intrinsics::from_camera(view.camera);
     const render::DepthLabelImage rendered = renderer.render(intrinsics, instances);

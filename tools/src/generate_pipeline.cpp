@@ -296,7 +296,7 @@ GenerateSummary write_dataset(const GenerateOptions& options,
     std::vector<datasets::DetectorInstance> detector_instances;
     for (const auto& object : scene.objects) {
       label_colours.push_back(catalogue[object.item].colour);
-      detector_instances.push_back({object.obj_id, 0, object.fixed});
+      detector_instances.push_back({object.obj_id, 0, object.fixed, {}});
       summary.deepest_stack = std::max(summary.deepest_stack, object.level);
     }
     std::vector<datasets::BopWriter::ImageData> images;

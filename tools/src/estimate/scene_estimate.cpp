@@ -517,9 +517,11 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
     if (object.failure.empty()) {
       estimator::MrfNode node;
       node.initial = initial[static_cast<std::size_t>(i)];
+      node.unary_mixture = node.initial;
       if (object.amodal) {
-        // No mixture unary: the initial one only says "somewhere behind the occluders"; the
-        // support messages place the object (a node without support edges gets it below).
+        // The mixture unary says "on the rays through the box, behind the surface seen there"
+        // (where along them is for the support messages to say), the pointwise one compares
+        // silhouette boxes.
         const MatchedBox& box = *std::max_element(
             own.begin(), own.end(),
             [](const MatchedBox& a, const MatchedBox& b) { return a.score < b.score; });
@@ -528,7 +530,6 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
             support_to_camera, view.camera.K, view.camera.width, view.camera.height, box.bbox,
             options.amodal_box_sigma);
       } else {
-        node.unary_mixture = node.initial;
         node.unary = std::make_shared<estimator::ScorerUnary>(
             s.scorer, object.obj_id, object.rotation, centre_model[i], support_to_camera,
             object.observation);
@@ -575,18 +576,6 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
     mrf.edges.push_back({a, b,
                          std::make_shared<estimator::NonContactPotential>(
                              extent[first], extent[second], options.non_contact_floor)});
-  }
-
-  // A hidden node that no support edge reaches has only its initial mixture to place it (what
-  // the amodal box's unary then weights): without it, its products would be empty and the
-  // importance weights would divide by the initial density.
-  for (const ObjectEstimate& object : result.objects) {
-    const int node = node_of[static_cast<std::size_t>(object.gt_id)];
-    if (!object.amodal || node < 0) continue;
-    const bool supported = std::any_of(mrf.edges.begin(), mrf.edges.end(), [&](const auto& edge) {
-      return (edge.first == node || edge.second == node) && edge.potential->is_sampled();
-    });
-    if (!supported) mrf.nodes[static_cast<std::size_t>(node)].unary_mixture = mrf.nodes[node].initial;
   }
 
   // NBP.

@@ -78,10 +78,11 @@ struct EstimateOptions {
   // boxes (--amodal-below-score).
   std::optional<double> amodal_below_score;
   // Hidden objects: the unary compares the hypothesis's projected silhouette box with the
-  // amodal box, each edge with sigma = amodal_box_sigma * box size; the initial mixture lies up
-  // to amodal_depth_span object diagonals behind the surface seen in the box.
+  // amodal box, each edge with sigma = amodal_box_sigma * box size; the initial (and mixture
+  // unary) lies on the rays through the box's centre, up to amodal_depth_span object diagonals
+  // behind the surface seen there.
   double amodal_box_sigma = 0.05;
-  double amodal_depth_span = 2.0;
+  double amodal_depth_span = 4.0;
   bool IsValid(std::string* why) const;
   // The estimator's models: proxies for the unary, CPU meshes for ICP.
   render::ModelCacheOptions model_cache() const;
