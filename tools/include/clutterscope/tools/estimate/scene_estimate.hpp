@@ -10,7 +10,12 @@
 // without one is bad input), or with Observation::kSynthetic the GT depth through
 // datasets::apply_sensor; measured depth is checked against the GT render for a wrong
 // depth_scale (datasets::check_depth_scale). Detections: the attached ones, else
-// the synthetic detector on the rendered GT labels. Random streams are per image
+// the synthetic detector on the rendered GT labels, which gives a completely hidden object its
+// amodal box (the paper's 100% recall). An object whose boxes are all amodal is estimated as
+// hidden: its initial mixture and mixture unary lie on the rays through its box behind the
+// surface seen there, its pointwise unary compares silhouette boxes instead of depth (the depth
+// there is the occluders'), the support messages place it along the rays, and its estimate is
+// the belief's mean and spread, without ICP. Random streams are per image
 // (tools::item_rng of seed and image), so results do not depend on threads or shards.
 //
 // A SceneEstimator owns an EGL context and renderer: one per thread, used on that thread.
