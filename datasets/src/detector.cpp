@@ -89,7 +89,8 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
   std::normal_distribution<double> gaussian(0.0, 1.0);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   // Visible detections score above every amodal box (clamped to at least one step above it).
-  const double min_score = options.amodal_boxes ? std::max(0.01, options.amodal_score + 1e-4) : 0.01;
+  const double min_score =
+      options.amodal_boxes ? std::max(0.01, options.amodal_score + 1e-4) : 0.01;
   std::vector<Detection> detections;
   for (int i = 0; i < n; ++i) {
     if (instances[i].fixed || visible[i] < options.min_visible_px) continue;
@@ -134,7 +135,8 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
   if (options.amodal_boxes) {
     for (int i = 0; i < n; ++i) {
       const cv::Rect& silhouette = instances[i].silhouette_bbox;
-      if (instances[i].fixed || visible[i] >= options.min_visible_px || silhouette.empty()) continue;
+      if (instances[i].fixed || visible[i] >= options.min_visible_px || silhouette.empty())
+        continue;
       Detection detection;
       detection.obj_id = instances[i].obj_id;
       detection.score = round_to(options.amodal_score, 1e-4);

@@ -183,13 +183,12 @@ GaussianMixture initial_mixture_behind_boxes(const std::vector<WeightedBox>& box
     const BoxObservation& o = *boxes[b].observation;
     const std::vector<int>& from = pixels[b];
     const int index = from[std::uniform_int_distribution<size_t>(0, from.size() - 1)(rng)];
-    const Eigen::Vector3d ray = o.camera_matrix.inverse() *
-                                Eigen::Vector3d(o.x + index % o.width + 0.5,
-                                                o.y + index / o.width + 0.5, 1);
+    const Eigen::Vector3d ray =
+        o.camera_matrix.inverse() *
+        Eigen::Vector3d(o.x + index % o.width + 0.5, o.y + index / o.width + 0.5, 1);
     const Eigen::Vector3d direction = ray.normalized();
-    const Eigen::Vector3d centre =
-        ray * o.depth[static_cast<size_t>(index)] +
-        (centre_to_surface(shape, direction) + behind(rng)) * direction;
+    const Eigen::Vector3d centre = ray * o.depth[static_cast<size_t>(index)] +
+                                   (centre_to_surface(shape, direction) + behind(rng)) * direction;
     points.col(s) = camera_to_support * centre;
   }
   const Eigen::VectorXd equal = Eigen::VectorXd::Constant(samples, 1.0 / samples);

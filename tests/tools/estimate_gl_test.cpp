@@ -16,8 +16,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <nlohmann/json.hpp>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <set>
 #include <sstream>
@@ -391,7 +391,8 @@ TEST(EstimateHiddenGl, CompletelyHiddenObjectsGetAnEstimateThroughTheGraph) {
     ASSERT_FALSE(value.first.empty()) << key << ": no estimate";
     const double err_cm = std::stod(value.first);
     errors.push_back(err_cm);
-    EXPECT_FALSE(value.second == "1" && err_cm > 2) << key << ": confident, " << err_cm << " cm off";
+    EXPECT_FALSE(value.second == "1" && err_cm > 2)
+        << key << ": confident, " << err_cm << " cm off";
   }
   std::sort(errors.begin(), errors.end());
   EXPECT_LT(errors[errors.size() / 2], 3.0) << "median error of the hidden objects (cm)";

@@ -195,7 +195,8 @@ class AmodalBoxUnary : public estimator::PointwiseLogPotential {
     // At most kVertices vertices (an even subsample): the box of a few hundred is within a
     // pixel of the silhouette's.
     constexpr std::size_t kVertices = 400;
-    const std::size_t step = std::max<std::size_t>(1, (mesh.positions.size() + kVertices - 1) / kVertices);
+    const std::size_t step =
+        std::max<std::size_t>(1, (mesh.positions.size() + kVertices - 1) / kVertices);
     offsets_.resize(3, static_cast<Eigen::Index>((mesh.positions.size() + step - 1) / step));
     Eigen::Index n = 0;
     for (std::size_t v = 0; v < mesh.positions.size(); v += step, ++n)
@@ -226,10 +227,9 @@ class AmodalBoxUnary : public estimator::PointwiseLogPotential {
         (*log_values)[i] = -1e6;  // behind the camera: no silhouette box to compare
         continue;
       }
-      Eigen::Vector4d edges(std::clamp(u0 - 0.5, 0.0, width_ - 1.0),
-                            std::clamp(v0 - 0.5, 0.0, height_ - 1.0),
-                            std::clamp(u1 - 0.5, 0.0, width_ - 1.0),
-                            std::clamp(v1 - 0.5, 0.0, height_ - 1.0));
+      Eigen::Vector4d edges(
+          std::clamp(u0 - 0.5, 0.0, width_ - 1.0), std::clamp(v0 - 0.5, 0.0, height_ - 1.0),
+          std::clamp(u1 - 0.5, 0.0, width_ - 1.0), std::clamp(v1 - 0.5, 0.0, height_ - 1.0));
       (*log_values)[i] = -0.5 * (edges - box_).cwiseProduct(inverse_sigma_).squaredNorm();
     }
   }
@@ -413,8 +413,7 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
     std::vector<int> category_ids;
     for (const auto& model : s.dataset.models()) category_ids.push_back(model.obj_id);
     std::mt19937_64 detector_rng = item_rng(options.seed, view.key, "detector");
-    detections =
-        datasets::detect(labels, instances, category_ids, options.detector, detector_rng);
+    detections = datasets::detect(labels, instances, category_ids, options.detector, detector_rng);
     result.detections = "synthetic";
   } else if (options.amodal_below_score) {
     for (datasets::Detection& detection : detections)
@@ -526,8 +525,8 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
             own.begin(), own.end(),
             [](const MatchedBox& a, const MatchedBox& b) { return a.score < b.score; });
         node.unary = std::make_shared<AmodalBoxUnary>(
-            s.models.cpu_mesh(object.obj_id), object.rotation, centre_model[i],
-            support_to_camera, view.camera.K, view.camera.width, view.camera.height, box.bbox,
+            s.models.cpu_mesh(object.obj_id), object.rotation, centre_model[i], support_to_camera,
+            view.camera.K, view.camera.width, view.camera.height, box.bbox,
             options.amodal_box_sigma);
       } else {
         node.unary = std::make_shared<estimator::ScorerUnary>(
