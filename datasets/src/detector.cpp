@@ -61,6 +61,9 @@ bool DetectorOptions::IsValid(std::string* why) const {
     if (!(amodal_jitter >= 0) || !std::isfinite(amodal_jitter)) {
       return fail("detector amodal box jitter must be a finite number >= 0");
     }
+    if (!(amodal_below_visibility >= 0 && amodal_below_visibility <= 1)) {
+      return fail("detector amodal-below visibility must be in [0, 1]");
+    }
   }
   return true;
 }
@@ -92,6 +95,15 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
   const double min_score =
       options.amodal_boxes ? std::max(0.01, options.amodal_score + 1e-4) : 0.01;
   std::vector<Detection> detections;
+  std::vector<bool> amodal(n, false);  // gets its amodal box
+  for (int i = 0; i < n; ++i) {
+    amodal[i] = options.amodal_boxes && !instances[i].fixed &&
+                !instances[i].silhouette_bbox.empty() &&
+                (visible[i] < options.min_visible_px ||
+                 (instances[i].silhouette_px > 0 &&
+                  static_cast<double>(visible[i]) <
+                      options.amodal_below_visibility * instances[i].silhouette_px));
+  }
   for (int i = 0; i < n; ++i) {
     if (instances[i].fixed || visible[i] < options.min_visible_px) continue;
     const double visibility =
@@ -107,13 +119,13 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
     // bop_toolkit's bbox: [xmin, ymin, xmax - xmin, ymax - ymin].
     detection.bbox =
         jittered_box(x0[i], y0[i], x1[i], y1[i], options.box_jitter, labels.cols, labels.rows, rng);
-    detections.push_back(detection);
+    if (!amodal[i]) detections.push_back(detection);
     if (unit(rng) < options.duplicate_probability) {
       Detection duplicate = detection;
       duplicate.score = round_to(detection.score / 2, 1e-4);
       duplicate.bbox = jittered_box(x0[i], y0[i], x1[i], y1[i], 2 * options.box_jitter + 0.05,
                                     labels.cols, labels.rows, rng);
-      detections.push_back(duplicate);
+      if (!amodal[i]) detections.push_back(duplicate);
     }
   }
   if (options.false_positives_per_image > 0 && !category_ids.empty()) {
@@ -135,8 +147,7 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
   if (options.amodal_boxes) {
     for (int i = 0; i < n; ++i) {
       const cv::Rect& silhouette = instances[i].silhouette_bbox;
-      if (instances[i].fixed || visible[i] >= options.min_visible_px || silhouette.empty())
-        continue;
+      if (!amodal[i]) continue;
       Detection detection;
       detection.obj_id = instances[i].obj_id;
       detection.score = round_to(options.amodal_score, 1e-4);

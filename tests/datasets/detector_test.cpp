@@ -168,6 +168,26 @@ TEST(Detector, AmodalBoxesLeaveVisibleDetectionsAndFalsePositivesUnchanged) {
   }
 }
 
+TEST(Detector, BarelyVisibleInstancesCanGetTheirAmodalBoxInstead) {
+  DetectorOptions options;
+  options.amodal_jitter = 0;
+  options.amodal_below_visibility = 0.6;  // instance 2 is half visible
+  std::mt19937_64 a(9), b(9);
+  const auto amodal = detect(label_image(), instances_with_silhouettes(), {}, options, a);
+  const auto plain = detect(label_image(), instances_with_silhouettes(), {}, DetectorOptions{}, b);
+  ASSERT_EQ(amodal.size(), 3u) << "still one box per non-fixed instance";
+  EXPECT_EQ(amodal[0].bbox, plain[0].bbox) << "the visible instance's box is unchanged";
+  EXPECT_EQ(amodal[0].score, plain[0].score);
+  EXPECT_EQ(amodal[1].obj_id, 2);
+  EXPECT_TRUE(amodal[1].amodal);
+  EXPECT_EQ(amodal[1].bbox, Eigen::Vector4d(50, 50, 19, 19)) << "its silhouette, not 50, 60";
+  EXPECT_EQ(amodal[2].obj_id, 3);
+  EXPECT_TRUE(amodal[2].amodal);
+  options.amodal_below_visibility = 1.5;
+  std::string why;
+  EXPECT_FALSE(options.IsValid(&why));
+}
+
 TEST(Detector, AmodalOptionsAreValidated) {
   std::string why;
   DetectorOptions options;

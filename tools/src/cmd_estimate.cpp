@@ -330,6 +330,8 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
     job.fingerprint["amodal_score"] = e.detector.amodal_score;
   if (e.detector.amodal_jitter != default_detector.amodal_jitter)
     job.fingerprint["amodal_jitter"] = e.detector.amodal_jitter;
+  if (e.detector.amodal_below_visibility != default_detector.amodal_below_visibility)
+    job.fingerprint["amodal_below_visibility"] = e.detector.amodal_below_visibility;
   if (e.amodal_below_score) job.fingerprint["amodal_below_score"] = *e.amodal_below_score;
   if (e.observation == Observation::kSynthetic) {
     job.fingerprint["observation"] = to_string(e.observation);

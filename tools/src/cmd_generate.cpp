@@ -102,6 +102,11 @@ void add_amodal_options(CLI::App& command, datasets::DetectorOptions* detector) 
       .add_option("--amodal-jitter", detector->amodal_jitter,
                   "detector: sigma of each amodal box edge as a fraction of the box size")
       ->capture_default_str();
+  command
+      .add_option("--amodal-below-visibility", detector->amodal_below_visibility,
+                  "detector: also give the amodal box (not the box of the visible pixels) to "
+                  "objects less visible than this fraction")
+      ->capture_default_str();
 }
 
 void add_generate_command(CLI::App& app, int* exit_code) {

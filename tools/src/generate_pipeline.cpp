@@ -201,7 +201,8 @@ nlohmann::json GenerateOptions::to_json() const {
                       {"false_positives_per_image", detector.false_positives_per_image},
                       {"amodal_boxes", detector.amodal_boxes},
                       {"amodal_score", detector.amodal_score},
-                      {"amodal_jitter", detector.amodal_jitter}};
+                      {"amodal_jitter", detector.amodal_jitter},
+                      {"amodal_below_visibility", detector.amodal_below_visibility}};
   json["sensor"] = datasets::to_json(sensor);
   json["clutterscope_version"] = CLUTTERSCOPE_VERSION;
   return json;

@@ -31,6 +31,10 @@ struct DetectorOptions {
   bool amodal_boxes = true;
   double amodal_score = 0.05;   // in (0, score_at_zero_visibility)
   double amodal_jitter = 0.03;  // >= 0
+  // Instances with visible pixels but a visibility (visible / silhouette_px) below this get the
+  // amodal box too, instead of the box of their few visible pixels, whose draws are made and
+  // discarded so that the other boxes stay the same. 0 (default): only hidden instances.
+  double amodal_below_visibility = 0.0;  // in [0, 1]
 
   bool IsValid(std::string* why) const;
 };
