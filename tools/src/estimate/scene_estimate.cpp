@@ -406,10 +406,15 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
   std::vector<datasets::Detection> detections = view.detections;
   result.detections = "attached";
   if (need_labels) {
+    // Silhouette sizes only where the amodal test needs them (they also make the scores fall
+    // with visibility, as generate's do; without, every score is that of full visibility).
+    const bool by_visibility = options.detector.amodal_below_visibility > 0;
     std::vector<datasets::DetectorInstance> instances;
-    for (int i = 0; i < n; ++i)
-      instances.push_back({view.objects[i].obj_id, 0, is_fixed[static_cast<std::size_t>(i)],
-                           counts[static_cast<std::size_t>(i)].silhouette_bbox});
+    for (int i = 0; i < n; ++i) {
+      const render::InstanceCounts& count = counts[static_cast<std::size_t>(i)];
+      instances.push_back({view.objects[i].obj_id, by_visibility ? count.silhouette_px : 0,
+                           is_fixed[static_cast<std::size_t>(i)], count.silhouette_bbox});
+    }
     std::vector<int> category_ids;
     for (const auto& model : s.dataset.models()) category_ids.push_back(model.obj_id);
     std::mt19937_64 detector_rng = item_rng(options.seed, view.key, "detector");
