@@ -52,6 +52,19 @@ bool DetectorOptions::IsValid(std::string* why) const {
   if (!(false_positives_per_image >= 0)) {
     return fail("detector false positives per image must be >= 0");
   }
+  if (amodal_boxes) {
+    if (!(amodal_score > 0 && amodal_score < score_at_zero_visibility)) {
+      return fail("detector amodal score must be in (0, score at zero visibility = " +
+                  std::to_string(score_at_zero_visibility) + "), got " +
+                  std::to_string(amodal_score));
+    }
+    if (!(amodal_jitter >= 0) || !std::isfinite(amodal_jitter)) {
+      return fail("detector amodal box jitter must be a finite number >= 0");
+    }
+    if (!(amodal_below_visibility >= 0 && amodal_below_visibility <= 1)) {
+      return fail("detector amodal-below visibility must be in [0, 1]");
+    }
+  }
   return true;
 }
 
@@ -78,7 +91,19 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
   }
   std::normal_distribution<double> gaussian(0.0, 1.0);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
+  // Visible detections score above every amodal box (clamped to at least one step above it).
+  const double min_score =
+      options.amodal_boxes ? std::max(0.01, options.amodal_score + 1e-4) : 0.01;
   std::vector<Detection> detections;
+  std::vector<bool> amodal(n, false);  // gets its amodal box
+  for (int i = 0; i < n; ++i) {
+    amodal[i] = options.amodal_boxes && !instances[i].fixed &&
+                !instances[i].silhouette_bbox.empty() &&
+                (visible[i] < options.min_visible_px ||
+                 (instances[i].silhouette_px > 0 &&
+                  static_cast<double>(visible[i]) <
+                      options.amodal_below_visibility * instances[i].silhouette_px));
+  }
   for (int i = 0; i < n; ++i) {
     if (instances[i].fixed || visible[i] < options.min_visible_px) continue;
     const double visibility =
@@ -90,17 +115,17 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
     const double score = options.score_at_zero_visibility +
                          (1.0 - options.score_at_zero_visibility) * visibility +
                          options.score_noise * gaussian(rng);
-    detection.score = round_to(std::clamp(score, 0.01, 1.0), 1e-4);
+    detection.score = round_to(std::clamp(score, min_score, 1.0), 1e-4);
     // bop_toolkit's bbox: [xmin, ymin, xmax - xmin, ymax - ymin].
     detection.bbox =
         jittered_box(x0[i], y0[i], x1[i], y1[i], options.box_jitter, labels.cols, labels.rows, rng);
-    detections.push_back(detection);
+    if (!amodal[i]) detections.push_back(detection);
     if (unit(rng) < options.duplicate_probability) {
       Detection duplicate = detection;
       duplicate.score = round_to(detection.score / 2, 1e-4);
       duplicate.bbox = jittered_box(x0[i], y0[i], x1[i], y1[i], 2 * options.box_jitter + 0.05,
                                     labels.cols, labels.rows, rng);
-      detections.push_back(duplicate);
+      if (!amodal[i]) detections.push_back(duplicate);
     }
   }
   if (options.false_positives_per_image > 0 && !category_ids.empty()) {
@@ -115,6 +140,21 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
       const double h = (0.05 + 0.15 * unit(rng)) * labels.rows;
       const double x = unit(rng) * (labels.cols - w), y = unit(rng) * (labels.rows - h);
       detection.bbox = jittered_box(x, y, x + w, y + h, 0.0, labels.cols, labels.rows, rng);
+      detections.push_back(detection);
+    }
+  }
+  // Amodal boxes last: the draws above are those of a detector without them.
+  if (options.amodal_boxes) {
+    for (int i = 0; i < n; ++i) {
+      const cv::Rect& silhouette = instances[i].silhouette_bbox;
+      if (!amodal[i]) continue;
+      Detection detection;
+      detection.obj_id = instances[i].obj_id;
+      detection.score = round_to(options.amodal_score, 1e-4);
+      detection.bbox = jittered_box(silhouette.x, silhouette.y, silhouette.x + silhouette.width - 1,
+                                    silhouette.y + silhouette.height - 1, options.amodal_jitter,
+                                    labels.cols, labels.rows, rng);
+      detection.amodal = true;
       detections.push_back(detection);
     }
   }

@@ -143,4 +143,56 @@ GaussianMixture initial_mixture_from_boxes(const std::vector<WeightedBox>& boxes
   return make_kernel_density(points, rule_of_thumb_bandwidth(points, equal, min_variance));
 }
 
+GaussianMixture initial_mixture_behind_boxes(const std::vector<WeightedBox>& boxes,
+                                             const OrientedBox& shape,
+                                             const Eigen::Isometry3d& camera_to_support,
+                                             double depth_span, int samples, double min_variance,
+                                             std::mt19937_64& rng) {
+  if (samples < 2) throw std::invalid_argument("initialisation needs >= 2 samples");
+  if (!(depth_span >= 0) || !std::isfinite(depth_span))
+    throw std::invalid_argument("initialisation: depth span must be finite and >= 0");
+  std::string why;
+  if (!shape.IsValid(&why)) throw std::invalid_argument(why);
+  std::vector<std::vector<int>> pixels(boxes.size());
+  std::vector<double> weights(boxes.size(), 0.0);
+  double total = 0;
+  for (size_t b = 0; b < boxes.size(); ++b) {
+    const BoxObservation* o = boxes[b].observation;
+    if (!o || !o->IsValid(&why))
+      throw std::invalid_argument("detection box " + std::to_string(b) + ": " + why);
+    if (!(boxes[b].confidence > 0)) continue;
+    std::vector<int> all, central;
+    for (int i = 0; i < static_cast<int>(o->depth.size()); ++i) {
+      if (!(o->depth[i] > 0)) continue;
+      all.push_back(i);
+      const int du = 4 * (i % o->width) + 2 - 2 * o->width;
+      const int dv = 4 * (i / o->width) + 2 - 2 * o->height;
+      if (std::abs(du) <= o->width && std::abs(dv) <= o->height) central.push_back(i);
+    }
+    pixels[b] = central.empty() ? all : central;
+    if (!pixels[b].empty()) weights[b] = boxes[b].confidence;
+    total += weights[b];
+  }
+  if (!(total > 0))
+    throw std::invalid_argument("detection boxes have no depth (or no confidence > 0)");
+  std::discrete_distribution<int> pick_box(weights.begin(), weights.end());
+  std::uniform_real_distribution<double> behind(0.0, depth_span);
+  Eigen::MatrixXd points(3, samples);
+  for (int s = 0; s < samples; ++s) {
+    const int b = pick_box(rng);
+    const BoxObservation& o = *boxes[b].observation;
+    const std::vector<int>& from = pixels[b];
+    const int index = from[std::uniform_int_distribution<size_t>(0, from.size() - 1)(rng)];
+    const Eigen::Vector3d ray =
+        o.camera_matrix.inverse() *
+        Eigen::Vector3d(o.x + index % o.width + 0.5, o.y + index / o.width + 0.5, 1);
+    const Eigen::Vector3d direction = ray.normalized();
+    const Eigen::Vector3d centre = ray * o.depth[static_cast<size_t>(index)] +
+                                   (centre_to_surface(shape, direction) + behind(rng)) * direction;
+    points.col(s) = camera_to_support * centre;
+  }
+  const Eigen::VectorXd equal = Eigen::VectorXd::Constant(samples, 1.0 / samples);
+  return make_kernel_density(points, rule_of_thumb_bandwidth(points, equal, min_variance));
+}
+
 }  // namespace clutterscope::estimator

@@ -62,6 +62,42 @@ TEST(Initialisation, BoxSamplesLandNearTheObjectCentre) {
   EXPECT_LT((mixture_mean(init) - scene.boxes[2].centre).norm(), 0.02);
 }
 
+TEST(Initialisation, HiddenObjectSamplesLieBehindTheSeenSurfaceOnCentralRays) {
+  // A wall at 1 m fills a 40 x 40 px amodal box centred on the principal point: the 4 cm cube
+  // behind it is on the rays through the box's central half (|u - cx|, |v - cy| <= 10 px), its
+  // centre 2 cm (face on) to 2.02 cm (the rays are within 0.6 degrees of the axis) plus up to
+  // the 10 cm span behind the wall, never in front of it.
+  BoxObservation wall;
+  wall.camera_matrix << 500, 0, 320, 0, 500, 240, 0, 0, 1;
+  wall.x = 300;
+  wall.y = 220;
+  wall.width = 40;
+  wall.height = 40;
+  wall.depth.assign(1600, 1.0f);
+  OrientedBox cube;
+  cube.half_size = Eigen::Vector3d::Constant(0.02);
+  std::mt19937_64 rng(21);
+  const GaussianMixture init = initial_mixture_behind_boxes(
+      {{&wall, 1.0}}, cube, Eigen::Isometry3d::Identity(), 0.10, 500, 1e-8, rng);
+  ASSERT_EQ(init.size(), 500);
+  double mean_behind = 0;
+  for (int c = 0; c < init.size(); ++c) {
+    const Eigen::Vector3d p = init.means.col(c);
+    const double u = 500 * p.x() / p.z() + 320, v = 500 * p.y() / p.z() + 240;
+    EXPECT_LE(std::abs(u - 320), 10.0 + 1e-9) << c;
+    EXPECT_LE(std::abs(v - 240), 10.0 + 1e-9) << c;
+    // Distance behind the wall along the ray, as a depth: z - 1 over the ray's z share.
+    const double behind = (p.z() - 1.0) * p.norm() / p.z();
+    EXPECT_GE(behind, 0.02 - 1e-9) << c;
+    EXPECT_LE(behind, 0.1203) << c;
+    mean_behind += behind / init.size();
+  }
+  EXPECT_NEAR(mean_behind, 0.02 + 0.05, 5 * 0.1 / std::sqrt(12.0 * 500));  // uniform span
+  EXPECT_THROW(initial_mixture_behind_boxes({{&wall, 1.0}}, cube, Eigen::Isometry3d::Identity(),
+                                            -0.1, 500, 1e-8, rng),
+               std::invalid_argument);
+}
+
 TEST(Initialisation, BoxesWithoutDepthAreAClearError) {
   BoxObservation empty;
   empty.camera_matrix << 100, 0, 10, 0, 100, 10, 0, 0, 1;

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/estimator/scorer.hpp>
 #include <clutterscope/render/context.hpp>
@@ -18,6 +19,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -421,6 +423,71 @@ TEST_F(EstimateGl, WithoutGraphAndDepthInfersTheGraphAndSimulatesTheSensor) {
   EXPECT_EQ(counts.at("images_with_synthetic_depth"), 2);
   EXPECT_EQ(counts.at("images_with_synthetic_detections"), 2);
   EXPECT_GE(counts.at("estimated").get<int>(), 6);
+}
+
+// generate --hidden: the synthetic detector gives every completely hidden object its amodal box,
+// so each gets an estimate, placed through the graph (the tray's support and the box's
+// silhouette), and none is confident while more than 2 cm off; with --no-amodal they have no
+// detection (the behaviour before amodal boxes).
+TEST(EstimateHiddenGl, CompletelyHiddenObjectsGetAnEstimateThroughTheGraph) {
+  std::string why;
+  if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+  const fs::path data = fresh_dir("estimate_hidden_dataset");
+  const CommandRun generated = run_merged(
+      "generate --out " + data.string() +
+      " --preset tray --scenes 4 --objects 6 --views 1 --width 320 --height 240 --hidden 1 "
+      "--seed 4 --quiet");
+  ASSERT_EQ(generated.exit_code, 0) << generated.output;
+  const fs::path visibility = fresh_dir("estimate_hidden_visibility");
+  const CommandRun seen =
+      run_merged("visibility " + data.string() + " --out " + visibility.string() + " --quiet");
+  ASSERT_EQ(seen.exit_code, 0) << seen.output;
+  // (scene_id, im_id, gt_id) of the objects less than 5% visible.
+  std::set<std::string> hidden, unseen;  // unseen: no visible pixel at all
+  const auto objects = read_csv(visibility / "objects.csv");
+  ASSERT_GT(objects.size(), 1u);
+  for (std::size_t r = 1; r < objects.size(); ++r) {
+    const std::string key = objects[r].at(1) + "/" + objects[r].at(2) + "/" + objects[r].at(3);
+    if (std::stod(objects[r].at(9)) < 0.05) hidden.insert(key);
+    if (objects[r].at(8) == "0") unseen.insert(key);
+  }
+  ASSERT_GE(unseen.size(), 3u);
+  ASSERT_GE(hidden.size(), 3u) << "seed 4 gives 6 objects under 5% visible";
+
+  const fs::path out = fresh_dir("estimate_hidden_out");
+  const fs::path plain = fresh_dir("estimate_hidden_plain");
+  const std::string options = " --particles 50 --iterations 5 --icp-samples 5 --quiet --no-time";
+  ASSERT_EQ(run_merged("estimate " + data.string() + " --out " + out.string() + options).exit_code,
+            0);
+  ASSERT_EQ(run_merged("estimate " + data.string() + " --out " + plain.string() + options +
+                       " --no-amodal")
+                .exit_code,
+            0);
+  auto errors_of_hidden = [&](const fs::path& folder) {
+    std::map<std::string, std::pair<std::string, std::string>> found;  // err_cm, confident
+    for (const auto& row : read_csv(folder / "estimates.csv")) {
+      const std::string key = row.at(1) + "/" + row.at(2) + "/" + row.at(3);
+      if (hidden.count(key)) found[key] = {row.at(13), row.at(12)};
+    }
+    return found;
+  };
+  const auto estimated = errors_of_hidden(out);
+  ASSERT_EQ(estimated.size(), hidden.size());
+  std::vector<double> errors;
+  for (const auto& [key, value] : estimated) {
+    ASSERT_FALSE(value.first.empty()) << key << ": no estimate";
+    const double err_cm = std::stod(value.first);
+    errors.push_back(err_cm);
+    EXPECT_FALSE(value.second == "1" && err_cm > 2)
+        << key << ": confident, " << err_cm << " cm off";
+  }
+  std::sort(errors.begin(), errors.end());
+  EXPECT_LT(errors[errors.size() / 2], 3.0) << "median error of the hidden objects (cm)";
+  for (const auto& [key, value] : errors_of_hidden(plain)) {
+    if (unseen.count(key)) {
+      EXPECT_TRUE(value.first.empty()) << key << ": without amodal boxes it has no detection";
+    }
+  }
 }
 
 }  // namespace

@@ -76,13 +76,14 @@ void run_detect(const DetectArguments& arguments) {
                            static_cast<std::uint32_t>(i + 1)});
       const bool is_fixed =
           std::find(fixed.begin(), fixed.end(), static_cast<int>(i)) != fixed.end();
-      detector_instances.push_back({obj_id, 0, is_fixed});
+      detector_instances.push_back({obj_id, 0, is_fixed, {}});
     }
     const render::Intrinsics intrinsics = render::Intrinsics::from_camera(view.camera);
     const render::DepthLabelImage rendered = renderer.render(intrinsics, instances);
     const auto counts = renderer.count_visibility(intrinsics, instances);
     for (std::size_t i = 0; i < counts.size(); ++i) {
       detector_instances[i].silhouette_px = counts[i].silhouette_px;
+      detector_instances[i].silhouette_bbox = counts[i].silhouette_bbox;
     }
     // The generator's detector stream for this image: the same seed gives the same boxes.
     std::mt19937_64 rng =
@@ -104,8 +105,9 @@ void add_detect_command(CLI::App& app, int* exit_code) {
       "detect",
       "Synthetic 2D detections for a dataset with GT poses (BOP detection results JSON): "
       "renders the GT labels and boxes the visible pixels of every instance with jitter, a "
-      "score falling with visibility and optional duplicates and false positives. Tray and "
-      "table instances (fixed) are not detected.");
+      "score falling with visibility and optional duplicates and false positives; a completely "
+      "hidden instance gets its amodal box (the silhouette it would have unoccluded) with a "
+      "low score. Tray and table instances (fixed) are not detected.");
   command->add_option("DATASET", arguments->dataset, "BOP dataset folder")->required();
   command->add_option("--out", arguments->out, "output JSON file")->required();
   command->add_option("--split", arguments->split, "split folder")->capture_default_str();

@@ -25,6 +25,7 @@
 #include "commands.hpp"
 #include "dataset_options.hpp"
 #include "depth_options.hpp"
+#include "generate_pipeline.hpp"
 #include "input_digest.hpp"
 
 namespace clutterscope::tools {
@@ -378,6 +379,15 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
   job.fingerprint["min_ess_fraction"] = e.min_effective_sample_fraction;
   job.fingerprint["correlated_pixels"] = e.correlated_pixels;
   // Defaults add nothing, so that folders of earlier runs keep resuming.
+  const datasets::DetectorOptions default_detector;
+  if (!e.detector.amodal_boxes) job.fingerprint["amodal_boxes"] = false;
+  if (e.detector.amodal_score != default_detector.amodal_score)
+    job.fingerprint["amodal_score"] = e.detector.amodal_score;
+  if (e.detector.amodal_jitter != default_detector.amodal_jitter)
+    job.fingerprint["amodal_jitter"] = e.detector.amodal_jitter;
+  if (e.detector.amodal_below_visibility != default_detector.amodal_below_visibility)
+    job.fingerprint["amodal_below_visibility"] = e.detector.amodal_below_visibility;
+  if (e.amodal_below_score) job.fingerprint["amodal_below_score"] = *e.amodal_below_score;
   if (e.observation == Observation::kSynthetic) {
     job.fingerprint["observation"] = to_string(e.observation);
   } else {
@@ -478,6 +488,11 @@ void add_estimator_options(CLI::App& command, EstimateOptions& e) {
       "--no-support-edges", [&e](std::int64_t) { e.support_edges = false; },
       "for ablation studies: build the MRF without the scene graph's support edges (and "
       "without the fixed support nodes they would attach)");
+  add_amodal_options(command, &e.detector);
+  command.add_option_function<double>(
+      "--amodal-below-score", [&e](double score) { e.amodal_below_score = score; },
+      "with --detections: estimate an object whose every box scores below this as hidden (its "
+      "boxes amodal), as the synthetic detector's amodal boxes are");
 }
 
 void add_estimate_command(CLI::App& app, int* exit_code) {

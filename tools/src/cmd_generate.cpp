@@ -85,6 +85,28 @@ void add_detector_options(CLI::App& command, datasets::DetectorOptions* detector
       .add_option("--false-positives", detector->false_positives_per_image,
                   "detector: mean number of false-positive boxes per image")
       ->capture_default_str();
+  add_amodal_options(command, detector);
+}
+
+void add_amodal_options(CLI::App& command, datasets::DetectorOptions* detector) {
+  command.add_flag_callback(
+      "--no-amodal", [detector] { detector->amodal_boxes = false; },
+      "detector: no box for a completely hidden object (default: its amodal box, the "
+      "silhouette it would have unoccluded, with a low score)");
+  command
+      .add_option("--amodal-score", detector->amodal_score,
+                  "detector: score of the amodal box of a hidden object (below every visible "
+                  "detection's)")
+      ->capture_default_str();
+  command
+      .add_option("--amodal-jitter", detector->amodal_jitter,
+                  "detector: sigma of each amodal box edge as a fraction of the box size")
+      ->capture_default_str();
+  command
+      .add_option("--amodal-below-visibility", detector->amodal_below_visibility,
+                  "detector: also give the amodal box (not the box of the visible pixels) to "
+                  "objects less visible than this fraction")
+      ->capture_default_str();
 }
 
 void add_generate_command(CLI::App& app, int* exit_code) {

@@ -198,7 +198,11 @@ nlohmann::json GenerateOptions::to_json() const {
                       {"score_at_zero_visibility", detector.score_at_zero_visibility},
                       {"score_noise", detector.score_noise},
                       {"duplicate_probability", detector.duplicate_probability},
-                      {"false_positives_per_image", detector.false_positives_per_image}};
+                      {"false_positives_per_image", detector.false_positives_per_image},
+                      {"amodal_boxes", detector.amodal_boxes},
+                      {"amodal_score", detector.amodal_score},
+                      {"amodal_jitter", detector.amodal_jitter},
+                      {"amodal_below_visibility", detector.amodal_below_visibility}};
   json["sensor"] = datasets::to_json(sensor);
   json["clutterscope_version"] = CLUTTERSCOPE_VERSION;
   return json;
@@ -293,7 +297,7 @@ GenerateSummary write_dataset(const GenerateOptions& options,
     std::vector<datasets::DetectorInstance> detector_instances;
     for (const auto& object : scene.objects) {
       label_colours.push_back(catalogue[object.item].colour);
-      detector_instances.push_back({object.obj_id, 0, object.fixed});
+      detector_instances.push_back({object.obj_id, 0, object.fixed, {}});
       summary.deepest_stack = std::max(summary.deepest_stack, object.level);
     }
     std::vector<datasets::BopWriter::ImageData> images;
@@ -317,6 +321,7 @@ GenerateSummary write_dataset(const GenerateOptions& options,
           renderer.count_visibility(intrinsics, instances);
       for (std::size_t i = 0; i < scene.objects.size(); ++i) {
         detector_instances[i].silhouette_px = counts[i].silhouette_px;
+        detector_instances[i].silhouette_bbox = counts[i].silhouette_bbox;
         if (scene.objects[i].fixed) continue;
         ++summary.objects;
         if (counts[i].visible_px == 0) {

@@ -71,4 +71,8 @@ render::Mesh to_render_mesh(const datasets::TriangleMesh& mesh);
 // detect.
 void add_detector_options(CLI::App& command, datasets::DetectorOptions* detector);
 
+// The amodal-box options alone (--no-amodal, --amodal-score, --amodal-jitter): part of
+// add_detector_options, and the options of estimate's synthetic detector.
+void add_amodal_options(CLI::App& command, datasets::DetectorOptions* detector);
+
 }  // namespace clutterscope::tools

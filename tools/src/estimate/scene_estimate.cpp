@@ -170,6 +170,78 @@ std::set<int> support_cycle_members(int count, const std::vector<std::pair<int, 
   return members;
 }
 
+// A detection box matched to a GT instance: the clipped pixel box, the BOP bbox, the score and
+// whether the box is amodal (a hidden object's unoccluded silhouette).
+struct MatchedBox {
+  cv::Rect box;
+  Eigen::Vector4d bbox;
+  double score = 0;
+  bool amodal = false;
+};
+
+// The unary of a hidden object. Eq. 6 would compare its model with the depth in its box, which
+// is the occluders' surface, and so pull the object onto them. What an amodal box says is where
+// the object's silhouette lies: log phi = -sum over the four edges (edge - box edge)^2 /
+// (2 (sigma * box size)^2), the hypothesis's silhouette box being that of the projected model
+// vertices (pixel indices, bop_toolkit's bbox convention: xmin = u_min - 0.5 for pixel centres
+// at u + 0.5), clipped to the image as the detector's box is.
+class AmodalBoxUnary : public estimator::PointwiseLogPotential {
+ public:
+  AmodalBoxUnary(const render::Mesh& mesh, const Eigen::Matrix3d& rotation,
+                 const Eigen::Vector3d& model_centre, const Eigen::Isometry3d& support_to_camera,
+                 const Eigen::Matrix3d& k, int width, int height, const Eigen::Vector4d& bbox,
+                 double sigma)
+      : support_to_camera_(support_to_camera), k_(k), width_(width), height_(height) {
+    // At most kVertices vertices (an even subsample): the box of a few hundred is within a
+    // pixel of the silhouette's.
+    constexpr std::size_t kVertices = 400;
+    const std::size_t step =
+        std::max<std::size_t>(1, (mesh.positions.size() + kVertices - 1) / kVertices);
+    offsets_.resize(3, static_cast<Eigen::Index>((mesh.positions.size() + step - 1) / step));
+    Eigen::Index n = 0;
+    for (std::size_t v = 0; v < mesh.positions.size(); v += step, ++n)
+      offsets_.col(n) = rotation * (mesh.positions[v].cast<double>() - model_centre);
+    offsets_.conservativeResize(3, n);
+    box_ << bbox[0], bbox[1], bbox[0] + bbox[2], bbox[1] + bbox[3];
+    const double w = std::max(1.0, bbox[2]), h = std::max(1.0, bbox[3]);
+    inverse_sigma_ << 1 / (sigma * w), 1 / (sigma * h), 1 / (sigma * w), 1 / (sigma * h);
+  }
+
+  void evaluate(const Eigen::MatrixXd& points, Eigen::VectorXd* log_values) override {
+    log_values->resize(points.cols());
+    for (Eigen::Index i = 0; i < points.cols(); ++i) {
+      const Eigen::Vector3d centre = support_to_camera_ * Eigen::Vector3d(points.col(i));
+      double u0 = std::numeric_limits<double>::infinity(), v0 = u0, u1 = -u0, v1 = -u0;
+      bool in_front = true;
+      for (Eigen::Index j = 0; j < offsets_.cols() && in_front; ++j) {
+        const Eigen::Vector3d p = centre + offsets_.col(j);
+        if (!(p.z() > 1e-3)) in_front = false;
+        const double u = k_(0, 0) * p.x() / p.z() + k_(0, 1) * p.y() / p.z() + k_(0, 2);
+        const double v = k_(1, 1) * p.y() / p.z() + k_(1, 2);
+        u0 = std::min(u0, u);
+        u1 = std::max(u1, u);
+        v0 = std::min(v0, v);
+        v1 = std::max(v1, v);
+      }
+      if (!in_front || offsets_.cols() == 0) {
+        (*log_values)[i] = -1e6;  // behind the camera: no silhouette box to compare
+        continue;
+      }
+      Eigen::Vector4d edges(
+          std::clamp(u0 - 0.5, 0.0, width_ - 1.0), std::clamp(v0 - 0.5, 0.0, height_ - 1.0),
+          std::clamp(u1 - 0.5, 0.0, width_ - 1.0), std::clamp(v1 - 0.5, 0.0, height_ - 1.0));
+      (*log_values)[i] = -0.5 * (edges - box_).cwiseProduct(inverse_sigma_).squaredNorm();
+    }
+  }
+
+ private:
+  Eigen::Matrix3Xd offsets_;  // model vertices about the centre, camera axes (metres)
+  Eigen::Isometry3d support_to_camera_;
+  Eigen::Matrix3d k_;
+  int width_, height_;
+  Eigen::Vector4d box_, inverse_sigma_;  // x0, y0, x1, y1 (pixels)
+};
+
 }  // namespace
 
 std::string to_string(Observation observation) {
@@ -216,6 +288,13 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (!(min_residual_m > 0)) return fail("the residual floor must be > 0");
   if (!(support_z_sigma_m > 0) || !(non_contact_floor > 0) || !(min_bandwidth_m > 0))
     return fail("support sigma, non-contact floor and bandwidth floor must be > 0");
+  if (!detector.IsValid(why)) return false;
+  if (amodal_below_score && !(*amodal_below_score > 0 && *amodal_below_score <= 1))
+    return fail("--amodal-below-score must be in (0, 1]");
+  if (!(amodal_box_sigma > 0) || !std::isfinite(amodal_box_sigma))
+    return fail("amodal box sigma must be a finite number > 0");
+  if (!(amodal_depth_span >= 0) || !std::isfinite(amodal_depth_span))
+    return fail("amodal depth span must be a finite number >= 0");
   return depth.IsValid(why);
 }
 
@@ -332,27 +411,35 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
           datasets::apply_sensor(clean.depth, view.camera, datasets::SensorOptions{}, sensor_rng);
     }
   }
-  std::vector<datasets::Detection> detections = view.detections;
-  result.detections = "attached";
-  if (need_labels) {
-    std::vector<datasets::DetectorInstance> instances;
-    for (int i = 0; i < n; ++i)
-      instances.push_back({view.objects[i].obj_id, 0, is_fixed[static_cast<std::size_t>(i)]});
-    std::vector<int> category_ids;
-    for (const auto& model : s.dataset.models()) category_ids.push_back(model.obj_id);
-    std::mt19937_64 detector_rng = item_rng(options.seed, view.key, "detector");
-    detections = datasets::detect(labels, instances, category_ids, datasets::DetectorOptions{},
-                                  detector_rng);
-    result.detections = "synthetic";
-  }
-
-  // Visibility of each GT instance (evaluation only; the estimator does not use it).
+  // Visibility of each GT instance (evaluation, and the synthetic detector's silhouettes).
   const std::vector<render::InstanceCounts> counts =
       s.renderer.count_visibility(image, render::scene_instances(view, s.models));
 
+  std::vector<datasets::Detection> detections = view.detections;
+  result.detections = "attached";
+  if (need_labels) {
+    // Silhouette sizes only where the amodal test needs them (they also make the scores fall
+    // with visibility, as generate's do; without, every score is that of full visibility).
+    const bool by_visibility = options.detector.amodal_below_visibility > 0;
+    std::vector<datasets::DetectorInstance> instances;
+    for (int i = 0; i < n; ++i) {
+      const render::InstanceCounts& count = counts[static_cast<std::size_t>(i)];
+      instances.push_back({view.objects[i].obj_id, by_visibility ? count.silhouette_px : 0,
+                           is_fixed[static_cast<std::size_t>(i)], count.silhouette_bbox});
+    }
+    std::vector<int> category_ids;
+    for (const auto& model : s.dataset.models()) category_ids.push_back(model.obj_id);
+    std::mt19937_64 detector_rng = item_rng(options.seed, view.key, "detector");
+    detections = datasets::detect(labels, instances, category_ids, options.detector, detector_rng);
+    result.detections = "synthetic";
+  } else if (options.amodal_below_score) {
+    for (datasets::Detection& detection : detections)
+      detection.amodal = detection.score < *options.amodal_below_score;
+  }
+
   // Detections to instances: by obj_id; several instances of one obj_id take the boxes that
   // overlap their projected model bounds best.
-  std::vector<std::vector<std::pair<cv::Rect, double>>> boxes(static_cast<std::size_t>(n));
+  std::vector<std::vector<MatchedBox>> boxes(static_cast<std::size_t>(n));
   for (const datasets::Detection& detection : detections) {
     const cv::Rect box = clip_box(detection.bbox, view.camera.width, view.camera.height);
     int best = -1;
@@ -375,7 +462,8 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
       continue;
     }
     if (box.area() == 0 || !(detection.score > 0)) continue;
-    boxes[static_cast<std::size_t>(best)].push_back({box, detection.score});
+    boxes[static_cast<std::size_t>(best)].push_back(
+        {box, detection.bbox, detection.score, detection.amodal});
   }
 
   std::vector<std::pair<int, int>> support;
@@ -403,6 +491,9 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
       object.visibility = static_cast<double>(counts[static_cast<std::size_t>(i)].visible_px) /
                           static_cast<double>(counts[static_cast<std::size_t>(i)].silhouette_px);
     const auto& own = boxes[static_cast<std::size_t>(i)];
+    // Hidden: every box of the object is amodal; its boxes show occluders, not the object.
+    object.amodal = !own.empty() && std::all_of(own.begin(), own.end(),
+                                                [](const MatchedBox& b) { return b.amodal; });
     if (in_cycle.count(i)) {
       object.failure = "on or above a cycle of support relations in the scene graph";
     } else if (own.empty()) {
@@ -413,19 +504,25 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
       std::size_t best = 0;
       for (std::size_t b = 0; b < own.size(); ++b) {
         observations.push_back(
-            box_observation(depth, view.camera.K, own[b].first, options.grid_pixels));
-        if (own[b].second > own[best].second) best = b;
+            box_observation(depth, view.camera.K, own[b].box, options.grid_pixels));
+        if (own[b].score > own[best].score) best = b;
       }
       for (std::size_t b = 0; b < own.size(); ++b)
-        weighted.push_back({observations[b].get(), own[b].second});
+        weighted.push_back({observations[b].get(), own[b].score});
       // The model's box in the camera frame, for the offset from seen surface to centre.
       const datasets::ModelInfo& model = s.dataset.model(object.obj_id);
       estimator::OrientedBox shape;
       shape.rotation = object.rotation;
       shape.half_size = 0.5 * model.size;
       try {
-        initial[static_cast<std::size_t>(i)] = estimator::initial_mixture_from_boxes(
-            weighted, shape, camera_to_support, options.particles, min_variance, rng);
+        initial[static_cast<std::size_t>(i)] =
+            object.amodal
+                ? estimator::initial_mixture_behind_boxes(
+                      weighted, shape, camera_to_support,
+                      options.amodal_depth_span * model.size.norm(), options.particles,
+                      min_variance, rng)
+                : estimator::initial_mixture_from_boxes(weighted, shape, camera_to_support,
+                                                        options.particles, min_variance, rng);
         object.observation = observations[best];
         if (object.observation->valid_pixels() == 0)
           throw std::invalid_argument("the detection box has no depth on its scoring grid");
@@ -437,9 +534,22 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
       estimator::MrfNode node;
       node.initial = initial[static_cast<std::size_t>(i)];
       node.unary_mixture = node.initial;
-      node.unary = std::make_shared<estimator::ScorerUnary>(s.scorer, object.obj_id,
-                                                            object.rotation, centre_model[i],
-                                                            support_to_camera, object.observation);
+      if (object.amodal) {
+        // The mixture unary says "on the rays through the box, behind the surface seen there"
+        // (where along them is for the support messages to say), the pointwise one compares
+        // silhouette boxes.
+        const MatchedBox& box = *std::max_element(
+            own.begin(), own.end(),
+            [](const MatchedBox& a, const MatchedBox& b) { return a.score < b.score; });
+        node.unary = std::make_shared<AmodalBoxUnary>(
+            s.models.cpu_mesh(object.obj_id), object.rotation, centre_model[i], support_to_camera,
+            view.camera.K, view.camera.width, view.camera.height, box.bbox,
+            options.amodal_box_sigma);
+      } else {
+        node.unary = std::make_shared<estimator::ScorerUnary>(
+            s.scorer, object.obj_id, object.rotation, centre_model[i], support_to_camera,
+            object.observation);
+      }
       node_of[static_cast<std::size_t>(i)] = static_cast<int>(mrf.nodes.size());
       mrf.nodes.push_back(std::move(node));
     }
@@ -530,6 +640,16 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
   estimator::IcpOptions icp_options;
   icp_options.max_correspondence_distance = options.icp_max_distance_m;
   icp_options.cull_back_faces = true;  // ICP runs in the camera frame
+  const auto keep_beliefs = [&](int node, ObjectEstimate* object) {
+    for (const auto& iteration : nbp.history) {
+      const estimator::GaussianMixture& mixture = iteration[static_cast<std::size_t>(node)];
+      std::vector<BeliefSample> samples;
+      for (int c = 0; c < mixture.size(); ++c)
+        samples.push_back(
+            {support_to_camera * Eigen::Vector3d(mixture.means.col(c)), mixture.weights[c]});
+      object->beliefs.push_back(std::move(samples));
+    }
+  };
   for (ObjectEstimate& object : result.objects) {
     const int node = node_of[static_cast<std::size_t>(object.gt_id)];
     const Eigen::Vector3d truth = support_to_camera * position[object.gt_id];
@@ -541,6 +661,21 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
             .norm();
     const estimator::GaussianMixture& belief = nbp.beliefs[static_cast<std::size_t>(node)];
     object.effective_sample_size = estimator::effective_sample_size(belief.weights);
+    if (object.amodal) {
+      // A hidden object has nothing of its own to fit (ICP would fit the occluders in its box):
+      // the estimate is the belief's mean, its variance the belief's spread per support-frame
+      // axis (particles and kernels), confident only if that is within the threshold.
+      const Eigen::Vector3d mean = estimator::mixture_mean(belief);
+      object.position = support_to_camera * mean;
+      object.variance = estimator::mixture_covariance(belief).diagonal();
+      object.confident = (object.variance.array() <= threshold_m2).all();
+      object.error_m = (object.position - truth).norm();
+      object.error_support_m = mean - position[object.gt_id];
+      object.nees = (object.error_support_m->array().square() / object.variance.array()).sum();
+      object.model_translation = object.position - object.rotation * object.model_centre;
+      if (options.keep_history) keep_beliefs(node, &object);
+      continue;
+    }
     const estimator::TranslationIcp icp(
         object.rotation * (s.model_points(object.obj_id).colwise() - object.model_centre),
         icp_options);
@@ -596,16 +731,7 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
     object.error_support_m = fused.mean - position[object.gt_id];
     object.nees = (object.error_support_m->array().square() / object.variance.array()).sum();
     object.model_translation = object.position - object.rotation * object.model_centre;
-    if (options.keep_history) {
-      for (const auto& iteration : nbp.history) {
-        const estimator::GaussianMixture& mixture = iteration[static_cast<std::size_t>(node)];
-        std::vector<BeliefSample> samples;
-        for (int c = 0; c < mixture.size(); ++c)
-          samples.push_back(
-              {support_to_camera * Eigen::Vector3d(mixture.means.col(c)), mixture.weights[c]});
-        object.beliefs.push_back(std::move(samples));
-      }
-    }
+    if (options.keep_history) keep_beliefs(node, &object);
   }
   result.time_icp = Clock::now() - icp_start;
   result.time_total = Clock::now() - start;

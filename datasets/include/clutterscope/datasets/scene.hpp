@@ -64,6 +64,9 @@ struct Detection {
   double score = 1.0;
   Eigen::Vector4d bbox = Eigen::Vector4d::Zero();
   double time = -1.0;
+  // The synthetic detector's box of a completely hidden instance (its unoccluded silhouette).
+  // Not part of BOP's format: detections read from a file have false.
+  bool amodal = false;
 };
 
 // Identifies one image of a dataset.

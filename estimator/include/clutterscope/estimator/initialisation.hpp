@@ -46,4 +46,17 @@ GaussianMixture initial_mixture_from_boxes(const std::vector<WeightedBox>& boxes
                                            const Eigen::Isometry3d& camera_to_support, int samples,
                                            double min_variance, std::mt19937_64& rng);
 
+// Initial mixture of an object that its boxes do not show (amodal boxes of a hidden object: the
+// box is where the object would be seen, the surface seen there is an occluder's). The object
+// lies behind that surface: pixels with depth in the central half of a box (boxes chosen in
+// proportion to their confidence; all pixels of the box when the centre has none), each pushed
+// along its ray behind the observed surface by the object's centre-to-surface distance plus a
+// uniform draw in [0, depth_span] (metres, >= 0), in the support frame, smoothed with the
+// rule-of-thumb bandwidth. Throws std::invalid_argument like initial_mixture_from_boxes.
+GaussianMixture initial_mixture_behind_boxes(const std::vector<WeightedBox>& boxes,
+                                             const OrientedBox& object,
+                                             const Eigen::Isometry3d& camera_to_support,
+                                             double depth_span, int samples, double min_variance,
+                                             std::mt19937_64& rng);
+
 }  // namespace clutterscope::estimator

@@ -10,7 +10,12 @@
 // without one is bad input), or with Observation::kSynthetic the GT depth through
 // datasets::apply_sensor; measured depth is checked against the GT render for a wrong
 // depth_scale (datasets::check_depth_scale). Detections: the attached ones, else
-// the synthetic detector on the rendered GT labels. Random streams are per image
+// the synthetic detector on the rendered GT labels, which gives a completely hidden object its
+// amodal box (the paper's 100% recall). An object whose boxes are all amodal is estimated as
+// hidden: its initial mixture and mixture unary lie on the rays through its box behind the
+// surface seen there, its pointwise unary compares silhouette boxes instead of depth (the depth
+// there is the occluders'), the support messages place it along the rays, and its estimate is
+// the belief's mean and spread, without ICP. Random streams are per image
 // (tools::item_rng of seed and image), so results do not depend on threads or shards.
 //
 // A SceneEstimator owns an EGL context and renderer: one per thread, used on that thread.
@@ -19,6 +24,7 @@
 #include <chrono>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/depth_check.hpp>
+#include <clutterscope/datasets/detector.hpp>
 #include <clutterscope/datasets/scene.hpp>
 #include <clutterscope/estimator/mixture.hpp>
 #include <clutterscope/estimator/nbp.hpp>
@@ -92,6 +98,19 @@ struct EstimateOptions {
   bool support_edges = true;
   double min_bandwidth_m =
       0.005;  // floor of the kernel standard deviation: keeps the K ICP starts apart
+  // The synthetic detector (no attached detections): boxes of the visible pixels, and the
+  // amodal box of every completely hidden object (DetectorOptions::amodal_boxes).
+  datasets::DetectorOptions detector;
+  // Attached detections do not say which boxes are amodal: with a value, an object whose every
+  // box scores below it is estimated as hidden, like one with the synthetic detector's amodal
+  // boxes (--amodal-below-score).
+  std::optional<double> amodal_below_score;
+  // Hidden objects: the unary compares the hypothesis's projected silhouette box with the
+  // amodal box, each edge with sigma = amodal_box_sigma * box size; the initial (and mixture
+  // unary) lies on the rays through the box's centre, up to amodal_depth_span object diagonals
+  // behind the surface seen there.
+  double amodal_box_sigma = 0.05;
+  double amodal_depth_span = 4.0;
   bool IsValid(std::string* why) const;
   // The estimator's models: proxies for the unary, CPU meshes for ICP.
   render::ModelCacheOptions model_cache() const;
@@ -120,6 +139,10 @@ struct ObjectEstimate {
   double effective_sample_size = 0;  // of the final belief's weights
   // Eq. 10 visibility of the GT instance (visible / silhouette pixels), for evaluation only.
   std::optional<double> visibility;
+  // Estimated as hidden (its detections are amodal boxes): the unary compares silhouette boxes,
+  // the depth in its box (an occluder's) is not fitted, and the estimate is the belief's mean
+  // and spread without ICP.
+  bool amodal = false;
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();       // model to camera (from the GT)
   Eigen::Vector3d model_translation = Eigen::Vector3d::Zero();  // BOP t (metres)
   std::vector<std::vector<BeliefSample>> beliefs;               // [iteration] with keep_history
