@@ -179,12 +179,11 @@ FusedEstimate fuse_fits(const std::vector<Eigen::Vector3d>& fits, double varianc
     estimate.weights /= estimate.weights.sum();
   }
   for (int a = 0; a < k; ++a) estimate.mean += estimate.weights[a] * fits[a];
-  for (int a = 0; a < k; ++a)
-    estimate.variance += estimate.weights[a] * (fits[a] - estimate.mean).cwiseAbs2();
   for (int a = 0; a < k; ++a) {
     const Eigen::Vector3d offset = fits[a] - estimate.mean;
     estimate.covariance += estimate.weights[a] * offset * offset.transpose();
   }
+  estimate.variance = estimate.covariance.diagonal();
   estimate.confident = (estimate.variance.array() <= variance_threshold).all();
   return estimate;
 }

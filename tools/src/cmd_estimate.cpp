@@ -92,6 +92,12 @@ class EstimateWorker {
         continue;
       }
       const bool ok = object.failure.empty();
+      // The 95%-ellipsoid decision, with --confidence-radius-cm only.
+      std::optional<bool> confident_radius;
+      if (ok && arguments_.estimate.confidence_radius_cm) {
+        confident_radius = report::confident_within_radius(
+            1e4 * object.variance.maxCoeff(), *arguments_.estimate.confidence_radius_cm);
+      }
       CsvRow row;
       row.add(key.split).add(key.scene_id).add(key.im_id).add(object.gt_id).add(object.obj_id);
       row.add(object.label);
@@ -104,12 +110,8 @@ class EstimateWorker {
         row.add(100 * *object.error_m, 4).add(100 * *object.initial_error_m, 4);
         for (int a = 0; a < 3; ++a) row.add(100 * (*object.error_support_m)[a], 4);
         row.add(format_general(*object.nees, 6));  // empty when not finite (a zero variance)
-        const double max_variance_cm2 = 1e4 * object.variance.maxCoeff();
-        row.add(format_general(report::radius95_cm(max_variance_cm2), 6));
-        const auto& radius = arguments_.estimate.confidence_radius_cm;
-        row.add(!radius                                                      ? ""
-                : report::confident_within_radius(max_variance_cm2, *radius) ? "1"
-                                                                             : "0");
+        row.add(format_general(report::radius95_cm(1e4 * object.variance.maxCoeff()), 6));
+        row.add(!confident_radius ? "" : *confident_radius ? "1" : "0");
         row.add(object.effective_sample_size, 2);
       } else {
         for (int column = 0; column < 16; ++column) row.add("");  // x_mm .. ess_min
@@ -129,10 +131,7 @@ class EstimateWorker {
         // Calibration (summary.json): a non-finite NEES (a zero variance) is left out.
         if (report::usable_nees(object.nees)) entry["nees"] = *object.nees;
         entry["ess_min"] = object.effective_sample_size;
-        if (arguments_.estimate.confidence_radius_cm) {
-          entry["confident_radius"] = report::confident_within_radius(
-              1e4 * object.variance.maxCoeff(), *arguments_.estimate.confidence_radius_cm);
-        }
+        if (confident_radius) entry["confident_radius"] = *confident_radius;
         const double threshold = arguments_.estimate.variance_threshold_cm2;
         const double score = std::exp(-1e4 * object.variance.maxCoeff() / threshold);
         CsvRow bop;

@@ -640,16 +640,6 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
   estimator::IcpOptions icp_options;
   icp_options.max_correspondence_distance = options.icp_max_distance_m;
   icp_options.cull_back_faces = true;  // ICP runs in the camera frame
-  const auto keep_beliefs = [&](int node, ObjectEstimate* object) {
-    for (const auto& iteration : nbp.history) {
-      const estimator::GaussianMixture& mixture = iteration[static_cast<std::size_t>(node)];
-      std::vector<BeliefSample> samples;
-      for (int c = 0; c < mixture.size(); ++c)
-        samples.push_back(
-            {support_to_camera * Eigen::Vector3d(mixture.means.col(c)), mixture.weights[c]});
-      object->beliefs.push_back(std::move(samples));
-    }
-  };
   for (ObjectEstimate& object : result.objects) {
     const int node = node_of[static_cast<std::size_t>(object.gt_id)];
     const Eigen::Vector3d truth = support_to_camera * position[object.gt_id];
@@ -661,77 +651,76 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
             .norm();
     const estimator::GaussianMixture& belief = nbp.beliefs[static_cast<std::size_t>(node)];
     object.effective_sample_size = estimator::effective_sample_size(belief.weights);
+    Eigen::Vector3d mean, variance;  // support frame
     if (object.amodal) {
       // A hidden object has nothing of its own to fit (ICP would fit the occluders in its box):
       // the estimate is the belief's mean, its variance the belief's spread per support-frame
       // axis (particles and kernels), confident only if that is within the threshold.
-      const Eigen::Vector3d mean = estimator::mixture_mean(belief);
-      object.position = support_to_camera * mean;
-      object.variance = estimator::mixture_covariance(belief).diagonal();
-      object.confident = (object.variance.array() <= threshold_m2).all();
-      object.error_m = (object.position - truth).norm();
-      object.error_support_m = mean - position[object.gt_id];
-      object.nees = (object.error_support_m->array().square() / object.variance.array()).sum();
-      object.model_translation = object.position - object.rotation * object.model_centre;
-      if (options.keep_history) keep_beliefs(node, &object);
-      continue;
+      mean = estimator::mixture_mean(belief);
+      variance = estimator::mixture_covariance(belief).diagonal();
+    } else {
+      const estimator::TranslationIcp icp(
+          object.rotation * (s.model_points(object.obj_id).colwise() - object.model_centre),
+          icp_options);
+      const auto [observed, normals] = observed_points(*object.observation, kIcpObservedPoints);
+      const Eigen::MatrixXd starts = estimator::sample_mixture(belief, options.icp_samples, rng);
+      std::vector<Eigen::Vector3d> fits;
+      std::vector<estimator::IcpResult> fit_results;
+      for (int k = 0; k < starts.cols(); ++k) {
+        const Eigen::Vector3d start_camera = support_to_camera * Eigen::Vector3d(starts.col(k));
+        fit_results.push_back(icp.align(observed, start_camera, &normals));
+        // Fits in the support frame, so that variances are per support-frame axis.
+        fits.push_back(camera_to_support * fit_results.back().position);
+      }
+      estimator::FusedEstimate fused;
+      try {
+        fused = estimator::fuse_fits(fits, threshold_m2);
+      } catch (const std::invalid_argument& error) {  // non-finite fits
+        object.failure = std::string("ICP post-processing failed: ") + error.what();
+        object.initial_error_m.reset();
+        continue;
+      }
+      // The fits' information per unit residual variance and the residual variance, averaged
+      // with the fusion weights, in the support frame; the belief's spread (its samples, with
+      // the proposal's kernel floor) bounds what the fits cannot see.
+      Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+      double residual_variance = 0;
+      for (std::size_t k = 0; k < fit_results.size(); ++k) {
+        information +=
+            fused.weights[static_cast<Eigen::Index>(k)] * fit_results[k].normal_information;
+        residual_variance += fused.weights[static_cast<Eigen::Index>(k)] *
+                             fit_results[k].rms_distance * fit_results[k].rms_distance;
+      }
+      const Eigen::Matrix3d to_support = camera_to_support.linear();
+      const double noise_variance =
+          std::max(residual_variance, options.min_residual_m * options.min_residual_m);
+      information = to_support * information * to_support.transpose() /
+                    (options.correlated_pixels * noise_variance);
+      estimator::GaussianMixture spread = belief;
+      spread.variances = Eigen::Vector3d::Constant(options.proposal_min_bandwidth_m *
+                                                   options.proposal_min_bandwidth_m);
+      mean = fused.mean;
+      variance = estimator::fused_covariance(fused.covariance, information,
+                                             estimator::mixture_covariance(spread))
+                     .diagonal();
     }
-    const estimator::TranslationIcp icp(
-        object.rotation * (s.model_points(object.obj_id).colwise() - object.model_centre),
-        icp_options);
-    const auto [observed, normals] = observed_points(*object.observation, kIcpObservedPoints);
-    const Eigen::MatrixXd starts = estimator::sample_mixture(belief, options.icp_samples, rng);
-    std::vector<Eigen::Vector3d> fits;
-    std::vector<estimator::IcpResult> fit_results;
-    for (int k = 0; k < starts.cols(); ++k) {
-      const Eigen::Vector3d start_camera = support_to_camera * Eigen::Vector3d(starts.col(k));
-      fit_results.push_back(icp.align(observed, start_camera, &normals));
-      // Fits in the support frame, so that variances are per support-frame axis.
-      fits.push_back(camera_to_support * fit_results.back().position);
-    }
-    estimator::FusedEstimate fused;
-    try {
-      fused = estimator::fuse_fits(fits, threshold_m2);
-    } catch (const std::invalid_argument& error) {  // non-finite fits
-      object.failure = std::string("ICP post-processing failed: ") + error.what();
-      object.initial_error_m.reset();
-      continue;
-    }
-    // The fits' information per unit residual variance and the residual variance, averaged
-    // with the fusion weights, in the support frame; the belief's spread bounds what the fits
-    // cannot see.
-    Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
-    double residual_variance = 0;
-    for (std::size_t k = 0; k < fit_results.size(); ++k) {
-      information +=
-          fused.weights[static_cast<Eigen::Index>(k)] * fit_results[k].normal_information;
-      residual_variance += fused.weights[static_cast<Eigen::Index>(k)] *
-                           fit_results[k].rms_distance * fit_results[k].rms_distance;
-    }
-    const Eigen::Matrix3d to_support = camera_to_support.linear();
-    const double noise_variance =
-        std::max(residual_variance, options.min_residual_m * options.min_residual_m);
-    information = to_support * information * to_support.transpose() /
-                  (options.correlated_pixels * noise_variance);
-    const double belief_floor = options.proposal_min_bandwidth_m * options.proposal_min_bandwidth_m;
-    Eigen::Matrix3d belief_covariance = belief_floor * Eigen::Matrix3d::Identity();
-    {
-      const Eigen::Vector3d mean = belief.means * belief.weights;
-      for (int c = 0; c < belief.size(); ++c) {
-        const Eigen::Vector3d offset = Eigen::Vector3d(belief.means.col(c)) - mean;
-        belief_covariance += belief.weights[c] * offset * offset.transpose();
+    object.position = support_to_camera * mean;
+    object.variance = variance;
+    object.confident = (variance.array() <= threshold_m2).all();
+    object.error_m = (object.position - truth).norm();
+    object.error_support_m = mean - position[object.gt_id];
+    object.nees = (object.error_support_m->array().square() / variance.array()).sum();
+    object.model_translation = object.position - object.rotation * object.model_centre;
+    if (options.keep_history) {
+      for (const auto& iteration : nbp.history) {
+        const estimator::GaussianMixture& mixture = iteration[static_cast<std::size_t>(node)];
+        std::vector<BeliefSample> samples;
+        for (int c = 0; c < mixture.size(); ++c)
+          samples.push_back(
+              {support_to_camera * Eigen::Vector3d(mixture.means.col(c)), mixture.weights[c]});
+        object.beliefs.push_back(std::move(samples));
       }
     }
-    const Eigen::Matrix3d covariance =
-        estimator::fused_covariance(fused.covariance, information, belief_covariance);
-    object.position = support_to_camera * fused.mean;
-    object.variance = covariance.diagonal();
-    object.confident = (object.variance.array() <= threshold_m2).all();
-    object.error_m = (object.position - truth).norm();
-    object.error_support_m = fused.mean - position[object.gt_id];
-    object.nees = (object.error_support_m->array().square() / object.variance.array()).sum();
-    object.model_translation = object.position - object.rotation * object.model_centre;
-    if (options.keep_history) keep_beliefs(node, &object);
   }
   result.time_icp = Clock::now() - icp_start;
   result.time_total = Clock::now() - start;
