@@ -293,7 +293,7 @@ class EstimateSummary : public SummaryBuilder {
         json_rounded(median(high_variances_), 6);
     accuracy["note"] =
         "visibility is Eq. 10 of the rendered GT scene; max_var is the largest per-axis variance "
-        "of the fused ICP fits";
+        "of the estimate's covariance (support frame)";
     summary["accuracy"] = accuracy;
     nlohmann::ordered_json calibration;
     calibration["note"] =
@@ -417,7 +417,7 @@ void add_estimator_options(CLI::App& command, EstimateOptions& e) {
   add_nbp_options(command, e);
   command
       .add_option("--variance-threshold-cm2", e.variance_threshold_cm2,
-                  "confident iff every axis variance of the fused fits is <= this (cm^2, > 0)")
+                  "confident iff every axis variance of the estimate is <= this (cm^2, > 0)")
       ->capture_default_str();
   command
       .add_option_function<double>(
