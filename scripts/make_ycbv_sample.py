@@ -10,7 +10,7 @@ their scene and image ids. rgb/, depth/ and mask_visib/ files, camera.json and t
 copied byte for byte; scene_camera.json, scene_gt.json and models/models_info.json are
 restricted to the chosen images and the objects they show (one entry per line, as in SOURCE);
 the models are converted to binary little-endian PLY by ply_ascii_to_binary.py. OUT must not
-exist. PROVENANCE.md is written by hand; SHA256SUMS is (re)written here over every other file.
+exist. PROVENANCE.md is written by hand; SHA256SUMS is written here over every other file.
 Python 3 stdlib only.
 """
 import hashlib
@@ -46,7 +46,7 @@ def write_sha256sums(out):
         for name in files:
             path = os.path.join(folder, name)
             relative = os.path.relpath(path, out)
-            if relative == "SHA256SUMS":
+            if relative in ("SHA256SUMS", "PROVENANCE.md"):
                 continue
             with open(path, "rb") as stream:
                 rows.append((relative, hashlib.sha256(stream.read()).hexdigest()))
