@@ -43,8 +43,8 @@ class YcbvRealSample : public ::testing::Test {
 TEST_F(YcbvRealSample, VisibilityGivesTheObjectOutsideTheImageNoVisiblePixel) {
   for (const std::string mode : {"rendered", "bop19"}) {
     const fs::path dir = out("visibility_" + mode);
-    const auto run = run_merged("visibility " + quoted(kSample) + " --mode " + mode +
-                                " --out " + quoted(dir) + " --quiet");
+    const auto run = run_merged("visibility " + quoted(kSample) + " --mode " + mode + " --out " +
+                                quoted(dir) + " --quiet");
     ASSERT_EQ(run.exit_code, 0) << mode << "\n" << run.output;
     const std::vector<report::ObjectRow> rows = report::read_objects_csv(dir / "objects.csv");
     ASSERT_EQ(rows.size(), 10u) << mode;
@@ -91,8 +91,8 @@ TEST_F(YcbvRealSample, EstimateOnMeasuredDepthIsAccurateWhereConfident) {
     if (!row.estimate) continue;
     ++estimated;
     const report::PoseEstimate& estimate = *row.estimate;
-    SCOPED_TRACE("scene " + std::to_string(row.scene_id) + " image " +
-                 std::to_string(row.im_id) + " gt " + std::to_string(row.gt_id));
+    SCOPED_TRACE("scene " + std::to_string(row.scene_id) + " image " + std::to_string(row.im_id) +
+                 " gt " + std::to_string(row.gt_id));
     ASSERT_TRUE(estimate.err_cm && estimate.init_err_cm);
     std::printf("ycbv_real %d/%d gt %d obj %d: err %.2f cm (init %.2f), confident %d\n",
                 row.scene_id, row.im_id, row.gt_id, row.obj_id, *estimate.err_cm,
