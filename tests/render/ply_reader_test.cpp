@@ -8,7 +8,9 @@
 #include <chrono>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/render/mesh.hpp>
+#include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -356,14 +358,55 @@ TEST_F(PlyFiles, SameMeshAsAssimpForTheBundledModels) {
   std::vector<fs::path> models;
   for (const fs::path& dir : {fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray6" / "models",
                               fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray10" / "models",
+                              fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "ycbv_real" / "models",
                               fs::path(CLUTTERSCOPE_SAMPLES_DIR) / ".." / ".." / "tests" /
                                   "visibility" / "data" / "bop_toolkit_reference" / "models"}) {
     for (const auto& entry : fs::directory_iterator(dir)) {
       if (entry.path().extension() == ".ply") models.push_back(entry.path());
     }
   }
-  EXPECT_GE(models.size(), 38u);
+  EXPECT_GE(models.size(), 43u);
   for (const fs::path& model : models) expect_same_as_assimp(model, true);
+}
+
+// scripts/ply_ascii_to_binary.py (how the ycbv_real sample's models were made): the binary file
+// loads to the same mesh as the ASCII one, each float32 rounded from the decimal text itself. The
+// first x lies just above the midpoint of 1 and the next float, 1 + 2^-23, by less than half a
+// double ulp: rounded through double it would tie to 1.
+TEST_F(PlyFiles, AsciiToBinaryScriptGivesTheSameMesh) {
+  const std::string header =
+      "ply\nformat ascii 1.0\ncomment units: mm\nelement vertex 4\nproperty float x\n"
+      "property float y\nproperty float z\nproperty float nx\nproperty float ny\n"
+      "property float nz\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n";
+  const fs::path ascii =
+      write("ascii.ply", header +
+                             "1.00000005960464477539062500001 -45.096000 0.1 0 0 1\n"
+                             "1.0000000596046447753906249999 1.694000 -15.447 0 0 1\n"
+                             "-36.058 -24.192000 3e2 -0.999044 0.043718 0.000023\n"
+                             "0 1 0 -0.782937 -0.618369 -0.068047\n3 0 1 2\n4 0 1 2 3\n");
+  const fs::path binary = dir_ / "binary.ply";
+  const fs::path script =
+      fs::path(CLUTTERSCOPE_SAMPLES_DIR) / ".." / ".." / "scripts" / "ply_ascii_to_binary.py";
+  const std::string command = "python3 '" + script.string() + "' '" + ascii.string() + "' '" +
+                              binary.string() + "' > '" + (dir_ / "log").string() + "' 2>&1";
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+
+  std::ifstream file(binary, std::ios::binary);
+  const std::string bytes(std::istreambuf_iterator<char>(file), {});
+  std::string expected_header = header;
+  expected_header.replace(expected_header.find("ascii"), 5, "binary_little_endian");
+  ASSERT_EQ(bytes.substr(0, expected_header.size()), expected_header);
+  EXPECT_EQ(bytes.size(), expected_header.size() + 4 * 6 * 4 + (1 + 3 * 4) + (1 + 4 * 4));
+
+  const Mesh from_ascii = load_mesh(ascii, {1.0});
+  const Mesh from_binary = load_mesh(binary, {1.0});
+  EXPECT_EQ(from_binary.positions, from_ascii.positions);
+  EXPECT_EQ(from_binary.normals, from_ascii.normals);
+  EXPECT_EQ(from_binary.triangles, from_ascii.triangles);
+  ASSERT_EQ(from_binary.positions.size(), 4u);
+  EXPECT_EQ(from_binary.positions[0].x(), 1.0f + std::ldexp(1.0f, -23));
+  EXPECT_EQ(from_binary.positions[1].x(), 1.0f);
+  EXPECT_EQ(from_binary.positions[2].z(), 300.0f);
 }
 
 TEST_F(PlyFiles, SameMeshAsAssimpForPolygonsLinesAndGeneratedNormals) {
