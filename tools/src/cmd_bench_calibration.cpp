@@ -91,6 +91,7 @@ std::vector<fs::path> generate_sets(const BenchCalibrationArguments& arguments,
     options.layout.hide_objects = arguments.hidden;
     options.scenes = arguments.scenes;
     options.seed = arguments.seed;
+    options.sensor = arguments.estimate.sensor;
     options.quiet = true;
     const GenerateSummary summary = generate_dataset(options);
     if (!arguments.quiet) {

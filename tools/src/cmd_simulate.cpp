@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "generate_pipeline.hpp"
 #include "output_folder.hpp"
 
 namespace clutterscope::tools {
@@ -460,6 +461,7 @@ void add_simulate_command(CLI::App& app, int* exit_code) {
       "OUT/compare.csv");
   EstimateOptions& e = arguments->estimate;
   add_nbp_options(*command, e);
+  add_sensor_preset_option(*command, &e.sensor, "the sensor of each round's observation");
   command->add_option("--seed", e.seed, "random seed (one stream per round)")
       ->capture_default_str();
   command->add_flag("--quiet", arguments->quiet, "print nothing on success");
