@@ -421,9 +421,13 @@ cv::Mat apply_sensor(const cv::Mat& clean_depth_m, const cv::Mat& labels,
           continue;
         }
       }
-      const bool need_edge = options.edge_dropout > 0 || flying;
-      const bool edge = need_edge && on_depth_edge(source, pu, pv, options.edge_jump_m);
-      if (edge && edge_draw < options.edge_dropout) continue;
+      // Edge test only for pixels whose draws make it matter (it reads four neighbours).
+      int edge = -1;  // unknown
+      const auto on_edge = [&] {
+        if (edge < 0) edge = on_depth_edge(source, pu, pv, options.edge_jump_m) ? 1 : 0;
+        return edge == 1;
+      };
+      if (options.edge_dropout > 0 && edge_draw < options.edge_dropout && on_edge()) continue;
       double theta = 0;
       if (need_normal) {
         const Eigen::Vector3d normal = surface_normal(source, camera, pu, pv, options.edge_jump_m);
@@ -432,9 +436,9 @@ cv::Mat apply_sensor(const cv::Mat& clean_depth_m, const cv::Mat& labels,
         if (options.max_incidence_deg < 90 && (normal.isZero() || cosine < cos_max_incidence)) {
           continue;
         }
-        theta = normal.isZero() ? 0.0 : std::acos(std::min(1.0, cosine));
+        if (options.noise_angle_m > 0 && !normal.isZero()) theta = std::acos(std::min(1.0, cosine));
       }
-      if (edge && flying_draw < options.flying_pixel_probability) {
+      if (flying_draw < options.flying_pixel_probability && on_edge()) {
         const double across = across_edge_neighbour(source, pu, pv, options.edge_jump_m);
         if (across > 0) z += flying_mix * (across - z);
       }
