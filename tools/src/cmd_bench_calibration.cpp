@@ -316,7 +316,11 @@ void run_bench(BenchCalibrationArguments arguments) {
     source = "generated tray, shelf and pile scenes (" + std::to_string(arguments.scenes) +
              " each, seed " + std::to_string(arguments.seed) + ", " +
              std::to_string(arguments.objects) + " objects, " + std::to_string(arguments.hidden) +
-             " hidden)";
+             " hidden" +
+             (arguments.estimate.sensor.preset == "default"
+                  ? std::string()
+                  : ", sensor " + arguments.estimate.sensor.preset) +
+             ")";
   } else {
     for (const std::string& dataset : arguments.datasets) sets.push_back(dataset);
     source = std::to_string(sets.size()) + " dataset" + (sets.size() > 1 ? "s" : "");

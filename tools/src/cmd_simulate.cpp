@@ -323,6 +323,10 @@ class Simulation {
     summary["observation"] =
         "synthetic: the current scene rendered from the dataset's camera through the sensor "
         "model, detections from the synthetic detector, a new random stream each round";
+    // The default sensor adds nothing, so that summaries keep their bytes.
+    if (arguments_.estimate.sensor.preset != "default") {
+      summary["sensor"] = datasets::to_json(arguments_.estimate.sensor);
+    }
     summary["stop"] = simulation::to_string(result.stop);
     summary["rounds"] = result.rounds.size();
     summary["picks"] = result.picks;
