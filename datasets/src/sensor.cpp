@@ -1,5 +1,5 @@
-#include <clutterscope/datasets/sensor.hpp>
 #include <algorithm>
+#include <clutterscope/datasets/sensor.hpp>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -175,7 +175,9 @@ double SensorOptions::disparity_depth_step(double z) const {
   return z * z * disparity_step_px / (disparity_focal_px * disparity_baseline_m);
 }
 
-std::vector<std::string> sensor_presets() { return {"default", "kinect-v1", "xtion", "d415", "d435"}; }
+std::vector<std::string> sensor_presets() {
+  return {"default", "kinect-v1", "xtion", "d415", "d435"};
+}
 
 SensorOptions sensor_preset(const std::string& name) {
   SensorOptions o;  // "default": the model of datasets generated before presets existed
@@ -247,7 +249,7 @@ SensorOptions sensor_preset(const std::string& name) {
     o.noise_a_m = 0.0;
     o.noise_b_per_m = kSubpixelRms / (focal * baseline);
     o.noise_z0_m = 0.0;
-    o.noise_angle_m = 0.0;  // judgement: no published angle term for the D400 series
+    o.noise_angle_m = 0.0;     // judgement: no published angle term for the D400 series
     o.quantisation_m = 0.001;  // Intel D400 datasheet: default depth unit 1 mm
     o.disparity_focal_px = focal;
     o.disparity_baseline_m = baseline;
@@ -259,8 +261,8 @@ SensorOptions sensor_preset(const std::string& name) {
     o.occlusion_shadow = true;
     o.max_incidence_deg = 75.0;  // judgement, as the default
     o.edge_jump_m = 0.02;
-    o.edge_dropout = 0.3;     // judgement
-    o.random_dropout = 0.0;   // judgement
+    o.edge_dropout = 0.3;    // judgement
+    o.random_dropout = 0.0;  // judgement
     // Judgement: Intel's minimum depth at 1280x720 is a few decimetres (D435 0.28 m), range
     // to about 10 m.
     o.min_range_m = 0.3;
@@ -340,8 +342,7 @@ Eigen::Isometry3d draw_model_misfit(const SensorOptions& options, std::mt19937_6
 cv::Mat apply_sensor(const cv::Mat& clean_depth_m, const Camera& camera,
                      const SensorOptions& options, std::mt19937_64& rng) {
   return apply_sensor(clean_depth_m, cv::Mat(), {}, camera, options,
-                      Eigen::Vector2d(options.registration_dx_px, options.registration_dy_px),
-                      rng);
+                      Eigen::Vector2d(options.registration_dx_px, options.registration_dy_px), rng);
 }
 
 cv::Mat apply_sensor(const cv::Mat& clean_depth_m, const cv::Mat& labels,
@@ -444,9 +445,8 @@ cv::Mat apply_sensor(const cv::Mat& clean_depth_m, const cv::Mat& labels,
       }
       double noisy = z + options.sigma(z, theta) * noise;
       if (options.disparity_step_px > 0 && noisy > 0) {
-        const double disparity =
-            std::round(disparity_scale / noisy / options.disparity_step_px) *
-            options.disparity_step_px;
+        const double disparity = std::round(disparity_scale / noisy / options.disparity_step_px) *
+                                 options.disparity_step_px;
         noisy = disparity > 0 ? disparity_scale / disparity : 0.0;
       }
       if (options.quantisation_m > 0) {

@@ -194,7 +194,9 @@ TEST(Sensor, PresetNoiseOnAFrontalPlaneMatchesItsPublishedFormula) {
     return [=](double z) { return z * z * 0.08 / (f * baseline); };
   };
   const std::vector<std::pair<std::string, std::function<double(double)>>> cases = {
-      {"kinect-v1", nguyen}, {"xtion", nguyen}, {"d415", intel(65, 0.055)},
+      {"kinect-v1", nguyen},
+      {"xtion", nguyen},
+      {"d415", intel(65, 0.055)},
       {"d435", intel(87, 0.050)}};
   for (const auto& [name, formula] : cases) {
     SensorOptions options = sensor_preset(name);
@@ -238,7 +240,7 @@ TEST(Sensor, MaterialDropoutShareMatchesItsProbability) {
   const double n = 100 * 100;
   EXPECT_NEAR(missing(0, 100), 0.3, 5 * std::sqrt(0.3 * 0.7 / n));
   EXPECT_EQ(missing(100, 150), 0.0);
-  EXPECT_EQ(missing(150, 200), 0.0);  // background
+  EXPECT_EQ(missing(150, 200), 0.0);                                               // background
   EXPECT_THROW(apply_sensor(clean, camera, options, rng), std::invalid_argument);  // no labels
 }
 

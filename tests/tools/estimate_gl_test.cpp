@@ -429,9 +429,9 @@ TEST_F(EstimateGl, SyntheticObservationTakesASensorPreset) {
   const fs::path plain = fresh_dir("estimate_sensor_default");
   const fs::path xtion = fresh_dir("estimate_sensor_xtion");
   const std::string common = " --observation synthetic --no-time" + kFast;
-  ASSERT_EQ(run_merged("estimate " + dataset_->string() + " --out " + plain.string() + common)
-                .exit_code,
-            0);
+  ASSERT_EQ(
+      run_merged("estimate " + dataset_->string() + " --out " + plain.string() + common).exit_code,
+      0);
   const CommandRun result = run_merged("estimate " + dataset_->string() + " --out " +
                                        xtion.string() + common + " --sensor xtion");
   ASSERT_EQ(result.exit_code, 0) << result.output;
@@ -441,9 +441,9 @@ TEST_F(EstimateGl, SyntheticObservationTakesASensorPreset) {
   const CommandRun mixed = run_merged("estimate " + dataset_->string() + " --out " +
                                       plain.string() + common + " --sensor xtion");
   EXPECT_NE(mixed.exit_code, 0) << mixed.output;
-  const CommandRun unknown = run_merged("estimate " + dataset_->string() + " --out " +
-                                        fresh_dir("estimate_sensor_nope").string() + common +
-                                        " --sensor nope");
+  const CommandRun unknown =
+      run_merged("estimate " + dataset_->string() + " --out " +
+                 fresh_dir("estimate_sensor_nope").string() + common + " --sensor nope");
   EXPECT_EQ(unknown.exit_code, 2);
   EXPECT_NE(unknown.output.find("kinect-v1"), std::string::npos) << unknown.output;
 }

@@ -111,46 +111,49 @@ void SensorArguments::add_to(CLI::App& command) {
         "lateral noise at depth edges, sigma (px)");
   field("--flying-pixels", &SensorOptions::flying_pixel_probability,
         "probability that a depth-edge pixel mixes foreground and background depth");
-  command.add_option_function<std::vector<std::string>>(
-      "--material-dropout",
-      [this](const std::vector<std::string>& items) {
-        const std::vector<datasets::CatalogueItem> catalogue = datasets::default_catalogue();
-        std::map<int, double> dropout;
-        for (const std::string& item : items) {
-          const auto colon = item.rfind(':');
-          const std::string who = item.substr(0, colon);
-          double p = -1;
-          int obj_id = -1;
-          try {
-            std::size_t used = 0;
-            if (colon != std::string::npos) p = std::stod(item.substr(colon + 1), &used);
-            if (used != item.size() - colon - 1) p = -1;
-          } catch (const std::exception&) {
-            p = -1;
-          }
-          const int index = datasets::find_item(catalogue, who);
-          if (index >= 0) {
-            obj_id = catalogue[static_cast<std::size_t>(index)].obj_id;
-          } else {
-            try {
-              std::size_t used = 0;
-              obj_id = std::stoi(who, &used);
-              if (used != who.size()) obj_id = -1;
-            } catch (const std::exception&) {
-              obj_id = -1;
+  command
+      .add_option_function<std::vector<std::string>>(
+          "--material-dropout",
+          [this](const std::vector<std::string>& items) {
+            const std::vector<datasets::CatalogueItem> catalogue = datasets::default_catalogue();
+            std::map<int, double> dropout;
+            for (const std::string& item : items) {
+              const auto colon = item.rfind(':');
+              const std::string who = item.substr(0, colon);
+              double p = -1;
+              int obj_id = -1;
+              try {
+                std::size_t used = 0;
+                if (colon != std::string::npos) p = std::stod(item.substr(colon + 1), &used);
+                if (used != item.size() - colon - 1) p = -1;
+              } catch (const std::exception&) {
+                p = -1;
+              }
+              const int index = datasets::find_item(catalogue, who);
+              if (index >= 0) {
+                obj_id = catalogue[static_cast<std::size_t>(index)].obj_id;
+              } else {
+                try {
+                  std::size_t used = 0;
+                  obj_id = std::stoi(who, &used);
+                  if (used != who.size()) obj_id = -1;
+                } catch (const std::exception&) {
+                  obj_id = -1;
+                }
+              }
+              if (colon == std::string::npos || p < 0 || p > 1 || obj_id < 0) {
+                throw UsageError(
+                    "--material-dropout: expected OBJ_ID:P or ITEM_NAME:P (P in [0, 1], "
+                    "names of the generator's catalogue), got \"" +
+                    item + "\"");
+              }
+              dropout[obj_id] = p;
             }
-          }
-          if (colon == std::string::npos || p < 0 || p > 1 || obj_id < 0) {
-            throw UsageError("--material-dropout: expected OBJ_ID:P or ITEM_NAME:P (P in [0, 1], "
-                             "names of the generator's catalogue), got \"" + item + "\"");
-          }
-          dropout[obj_id] = p;
-        }
-        overrides_.push_back(
-            [dropout](datasets::SensorOptions& s) { s.material_dropout = dropout; });
-      },
-      "sensor: dark or specular objects, OBJ_ID:P or ITEM_NAME:P (catalogue names), each the "
-      "probability of no return on that object's pixels (default: the preset's, none)")
+            overrides_.push_back(
+                [dropout](datasets::SensorOptions& s) { s.material_dropout = dropout; });
+          },
+          "sensor: dark or specular objects, OBJ_ID:P or ITEM_NAME:P (catalogue names), each the "
+          "probability of no return on that object's pixels (default: the preset's, none)")
       ->delimiter(',');
   field("--registration-dx", &SensorOptions::registration_dx_px,
         "depth-to-colour offset along x (px, rounded)");

@@ -421,7 +421,8 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
       }
       const render::DepthLabelImage& seen = options.sensor.has_misfit() ? misfit_render : clean;
       std::vector<int> label_obj_ids = {0};
-      for (const datasets::GtInstance& object : view.objects) label_obj_ids.push_back(object.obj_id);
+      for (const datasets::GtInstance& object : view.objects)
+        label_obj_ids.push_back(object.obj_id);
       std::mt19937_64 registration_rng = item_rng(options.seed, view.key, "sensor registration");
       const Eigen::Vector2d registration =
           datasets::draw_registration_offset(options.sensor, registration_rng);

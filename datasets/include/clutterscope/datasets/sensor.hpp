@@ -89,7 +89,9 @@ struct SensorOptions {
   double sigma(double z, double theta) const;
   // The depth step of disparity quantisation at depth z: z^2 s / (f B) (0 when off).
   double disparity_depth_step(double z) const;
-  bool has_misfit() const { return misfit_translation_sigma_m > 0 || misfit_rotation_sigma_deg > 0; }
+  bool has_misfit() const {
+    return misfit_translation_sigma_m > 0 || misfit_rotation_sigma_deg > 0;
+  }
 };
 
 // The named presets ("default", "kinect-v1", "xtion", "d415", "d435"); each parameter's source
