@@ -1,5 +1,8 @@
+#include <algorithm>
 #include <clutterscope/datasets/sensor.hpp>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <stdexcept>
 
 namespace clutterscope::datasets {
@@ -62,6 +65,53 @@ bool on_depth_edge(const cv::Mat& depth, int u, int v, double edge_jump) {
   return false;
 }
 
+// The neighbour across a depth edge with the largest jump that has a surface, or 0.
+float across_edge_neighbour(const cv::Mat& depth, int u, int v, double edge_jump) {
+  const float z = depth.at<float>(v, u);
+  float best = 0, best_jump = 0;
+  for (const auto& [du, dv] :
+       {std::pair{1, 0}, std::pair{-1, 0}, std::pair{0, 1}, std::pair{0, -1}}) {
+    const int nu = u + du, nv = v + dv;
+    if (nu < 0 || nv < 0 || nu >= depth.cols || nv >= depth.rows) continue;
+    const float nz = depth.at<float>(nv, nu);
+    const float jump = std::abs(nz - z);
+    if (nz > 0 && jump > edge_jump && jump > best_jump) {
+      best = nz;
+      best_jump = jump;
+    }
+  }
+  return best;
+}
+
+// `image` moved by (dx, dy) whole pixels: out(u, v) = image(u - dx, v - dy), 0 outside.
+cv::Mat shifted(const cv::Mat& image, int dx, int dy) {
+  cv::Mat out(image.size(), image.type(), cv::Scalar(0));
+  const int width = image.cols - std::abs(dx), height = image.rows - std::abs(dy);
+  if (width <= 0 || height <= 0) return out;
+  image(cv::Rect(std::max(0, -dx), std::max(0, -dy), width, height))
+      .copyTo(out(cv::Rect(std::max(0, dx), std::max(0, dy), width, height)));
+  return out;
+}
+
+// 1 where the projector / second imager at +baseline along x cannot see the surface: a
+// surface point at column u lands on the projector's column u - fx B / z; it is hidden when a
+// pixel to its right lands at or left of it (a nearer surface on the projector's ray).
+cv::Mat occlusion_shadow(const cv::Mat& depth, double fx_baseline) {
+  cv::Mat shadow(depth.size(), CV_8U, cv::Scalar(0));
+  for (int v = 0; v < depth.rows; ++v) {
+    const float* row = depth.ptr<float>(v);
+    std::uint8_t* out = shadow.ptr<std::uint8_t>(v);
+    double min_right = std::numeric_limits<double>::infinity();
+    for (int u = depth.cols - 1; u >= 0; --u) {
+      if (!(row[u] > 0)) continue;
+      const double projected = u - fx_baseline / row[u];
+      if (min_right < projected) out[u] = 1;
+      min_right = std::min(min_right, projected);
+    }
+  }
+  return shadow;
+}
+
 }  // namespace
 
 bool SensorOptions::IsValid(std::string* why) const {
@@ -69,71 +119,336 @@ bool SensorOptions::IsValid(std::string* why) const {
     if (why) *why = message;
     return false;
   };
-  if (!(noise_a_m >= 0) || !(noise_b_per_m >= 0)) {
-    return fail("sensor noise coefficients a, b must be >= 0");
+  const auto probability = [](double p) { return p >= 0 && p <= 1; };
+  if (preset.empty()) return fail("sensor preset name must not be empty");
+  if (!(noise_a_m >= 0) || !(noise_b_per_m >= 0) || !(noise_z0_m >= 0) || !(noise_angle_m >= 0)) {
+    return fail("sensor noise coefficients a, b, z0 and the angle term must be >= 0");
   }
   if (!(quantisation_m >= 0)) return fail("sensor quantisation must be >= 0 m");
+  if (!(disparity_focal_px >= 0) || !(disparity_baseline_m >= 0) || !(disparity_step_px >= 0)) {
+    return fail("sensor disparity focal length, baseline and step must be >= 0");
+  }
+  if (disparity_step_px > 0 && !(disparity_focal_px > 0 && disparity_baseline_m > 0)) {
+    return fail("sensor disparity quantisation needs a focal length and a baseline > 0");
+  }
+  if (occlusion_shadow && !(disparity_baseline_m > 0)) {
+    return fail("sensor occlusion shadow needs a baseline > 0 m");
+  }
   if (!(max_incidence_deg > 0 && max_incidence_deg <= 90)) {
     return fail("sensor max incidence angle must be in (0, 90] degrees, got " +
                 std::to_string(max_incidence_deg));
   }
   if (!(edge_jump_m > 0)) return fail("sensor edge jump must be > 0 m");
-  if (!(edge_dropout >= 0 && edge_dropout <= 1) || !(random_dropout >= 0 && random_dropout <= 1)) {
-    return fail("sensor dropout probabilities must be in [0, 1]");
+  if (!probability(edge_dropout) || !probability(random_dropout) ||
+      !probability(flying_pixel_probability)) {
+    return fail("sensor dropout and flying-pixel probabilities must be in [0, 1]");
+  }
+  for (const auto& [obj_id, p] : material_dropout) {
+    if (!probability(p)) {
+      return fail("sensor material dropout of obj_id " + std::to_string(obj_id) +
+                  " must be in [0, 1], got " + std::to_string(p));
+    }
   }
   if (!(min_range_m >= 0 && max_range_m > min_range_m)) {
     return fail("sensor range must satisfy 0 <= min < max");
   }
+  if (!(lateral_sigma_px >= 0) || !(registration_sigma_px >= 0)) {
+    return fail("sensor lateral and registration sigmas must be >= 0 px");
+  }
+  if (!std::isfinite(registration_dx_px) || !std::isfinite(registration_dy_px)) {
+    return fail("sensor registration offset must be finite");
+  }
+  if (!(misfit_translation_sigma_m >= 0) || !(misfit_rotation_sigma_deg >= 0)) {
+    return fail("sensor model misfit sigmas must be >= 0");
+  }
   return true;
+}
+
+double SensorOptions::sigma(double z, double theta) const {
+  if (!(noise_angle_m > 0)) return sigma(z);
+  const double rest = kPi / 2 - theta;
+  return sigma(z) + noise_angle_m / std::sqrt(z) * theta * theta / (rest * rest);
+}
+
+double SensorOptions::disparity_depth_step(double z) const {
+  if (!(disparity_step_px > 0)) return 0;
+  return z * z * disparity_step_px / (disparity_focal_px * disparity_baseline_m);
+}
+
+std::vector<std::string> sensor_presets() {
+  return {"default", "kinect-v1", "xtion", "d415", "d435"};
+}
+
+SensorOptions sensor_preset(const std::string& name) {
+  SensorOptions o;  // "default": the model of datasets generated before presets existed
+  if (name == "default") return o;
+  const auto model_misfit = [&o] {
+    // Judgement from ../shared/data/ycbv_real/PROVENANCE.md: scanned YCB models differ from
+    // the official YCB-Video ones by ~3 mm and 0.4 deg; per-axis sigmas of 2 mm and 0.25 deg
+    // give RMS magnitudes of 3.5 mm and 0.43 deg.
+    o.misfit_translation_sigma_m = 0.002;
+    o.misfit_rotation_sigma_deg = 0.25;
+  };
+  if (name == "kinect-v1" || name == "xtion") {
+    o.preset = name;
+    // Nguyen, Izadi & Lovell 2012 (3DIMPVT), Kinect v1 axial noise:
+    // sigma_z = 0.0012 + 0.0019 (z - 0.4)^2 m + 0.0001 / sqrt(z) * theta^2 / (pi/2 - theta)^2.
+    o.noise_a_m = 0.0012;
+    o.noise_b_per_m = 0.0019;
+    o.noise_z0_m = 0.4;
+    o.noise_angle_m = 0.0001;
+    // OpenNI / the Kinect SDK deliver depth in whole millimetres.
+    o.quantisation_m = 0.001;
+    // Khoshelham & Elberink 2012 (Sensors 12(2):1437): baseline 7.5 cm, disparity in 1/8 px,
+    // IR focal length ~580 px (their calibration: 585.6 px); depth step 7 cm at 5 m.
+    o.disparity_focal_px = 580.0;
+    o.disparity_baseline_m = 0.075;
+    o.disparity_step_px = 0.125;
+    // Structured light: no return where the projector, 7.5 cm beside the IR camera, is
+    // occluded (the shadow band beside objects; Khoshelham & Elberink 2012, Fig. 1). The side
+    // (+x of the image) is a judgement.
+    o.occlusion_shadow = true;
+    // Judgement: Nguyen et al. 2012 measure up to about 70-80 deg; kept at the default's 75.
+    o.max_incidence_deg = 75.0;
+    // Judgement: the shadow models the systematic edge losses; a smaller random share
+    // of the remaining depth-edge pixels is lost.
+    o.edge_jump_m = 0.02;
+    o.edge_dropout = 0.3;
+    o.random_dropout = 0.0;  // judgement: no returns lost away from edges and materials
+    // Nguyen et al. 2012 fit from 0.4 m; Khoshelham & Elberink 2012: operating range 0.5-5 m.
+    o.min_range_m = 0.4;
+    o.max_range_m = 5.0;
+    // Nguyen et al. 2012: lateral noise sigma_L ~ 0.8 px, at depth edges.
+    o.lateral_sigma_px = 0.8;
+    // Judgement: a fifth of the remaining edge pixels mix foreground and background.
+    o.flying_pixel_probability = 0.2;
+    // Judgement: factory depth-to-colour registration good to about a pixel.
+    o.registration_sigma_px = 0.5;
+    model_misfit();
+    if (name == "xtion") {
+      // Asus Xtion Pro Live / PrimeSense Carmine 1.08: the same PrimeSense reference design as
+      // Kinect v1 (baseline 7.5 cm, 1/8 px disparity); YCB-Video was captured with one.
+      // OpenNI's default PrimeSense depth focal length: 570.3 px at 640x480 (judgement: the
+      // ROS openni driver's default, not a calibration of a particular unit).
+      o.disparity_focal_px = 570.3;
+      // Judgement: Asus specifies 0.8-3.5 m; PrimeSense units return from about 0.5 m.
+      o.min_range_m = 0.5;
+      o.max_range_m = 3.5;
+    }
+    return o;
+  }
+  if (name == "d415" || name == "d435") {
+    o.preset = name;
+    // Grunnet-Jepsen et al., Intel, "Tuning depth cameras for best performance" (2018):
+    // depth RMS = Z^2 s / (f B), s ~ 0.08 px subpixel RMS; f = 0.5 HRes / tan(HFOV / 2) at the
+    // 1280 px depth resolution. D415: B = 55 mm, HFOV 65 deg; D435: B = 50 mm, HFOV 87 deg.
+    const double hfov_deg = name == "d415" ? 65.0 : 87.0;
+    const double baseline = name == "d415" ? 0.055 : 0.050;
+    const double focal = 0.5 * 1280.0 / std::tan(0.5 * hfov_deg * kPi / 180.0);
+    constexpr double kSubpixelRms = 0.08;
+    o.noise_a_m = 0.0;
+    o.noise_b_per_m = kSubpixelRms / (focal * baseline);
+    o.noise_z0_m = 0.0;
+    o.noise_angle_m = 0.0;     // judgement: no published angle term for the D400 series
+    o.quantisation_m = 0.001;  // Intel D400 datasheet: default depth unit 1 mm
+    o.disparity_focal_px = focal;
+    o.disparity_baseline_m = baseline;
+    // Judgement: the D4 ASIC reports disparity with 5 fractional bits (1/32 px), well below
+    // the 0.08 px noise.
+    o.disparity_step_px = 1.0 / 32.0;
+    // Stereo with the left imager as reference: no depth where the right imager, B to +x,
+    // cannot see the surface (Intel's "invalid depth band" on the left of objects).
+    o.occlusion_shadow = true;
+    o.max_incidence_deg = 75.0;  // judgement, as the default
+    o.edge_jump_m = 0.02;
+    o.edge_dropout = 0.3;    // judgement
+    o.random_dropout = 0.0;  // judgement
+    // Judgement: Intel's minimum depth at 1280x720 is a few decimetres (D435 0.28 m), range
+    // to about 10 m.
+    o.min_range_m = 0.3;
+    o.max_range_m = 10.0;
+    o.lateral_sigma_px = 0.5;  // judgement: stereo matching windows blur edges by ~half a px
+    // Judgement: stereo matching mixes foreground and background at edges (Intel's
+    // post-processing white paper removes them with an edge-preserving filter).
+    o.flying_pixel_probability = 0.3;
+    o.registration_sigma_px = 0.5;  // judgement: factory registration to about a pixel
+    model_misfit();
+    return o;
+  }
+  std::string known;
+  for (const std::string& preset : sensor_presets()) known += (known.empty() ? "" : ", ") + preset;
+  throw std::invalid_argument("unknown sensor preset \"" + name + "\" (known: " + known + ")");
 }
 
 nlohmann::json to_json(const SensorOptions& options) {
   nlohmann::json json;
-  json["model"] = "sigma_z_m = noise_a_m + noise_b_per_m * z_m^2";
+  json["preset"] = options.preset;
+  json["model"] =
+      "sigma_z_m = noise_a_m + noise_b_per_m * (z_m - noise_z0_m)^2 + noise_angle_m / sqrt(z_m) "
+      "* theta^2 / (pi/2 - theta)^2; disparity f B / z rounded to disparity_step_px";
   json["noise_a_m"] = options.noise_a_m;
   json["noise_b_per_m"] = options.noise_b_per_m;
+  json["noise_z0_m"] = options.noise_z0_m;
+  json["noise_angle_m"] = options.noise_angle_m;
   json["quantisation_m"] = options.quantisation_m;
+  json["disparity_focal_px"] = options.disparity_focal_px;
+  json["disparity_baseline_m"] = options.disparity_baseline_m;
+  json["disparity_step_px"] = options.disparity_step_px;
+  json["occlusion_shadow"] = options.occlusion_shadow;
   json["max_incidence_deg"] = options.max_incidence_deg;
   json["edge_jump_m"] = options.edge_jump_m;
   json["edge_dropout"] = options.edge_dropout;
   json["random_dropout"] = options.random_dropout;
   json["min_range_m"] = options.min_range_m;
   json["max_range_m"] = options.max_range_m;
+  json["lateral_sigma_px"] = options.lateral_sigma_px;
+  json["flying_pixel_probability"] = options.flying_pixel_probability;
+  nlohmann::json materials = nlohmann::json::object();
+  for (const auto& [obj_id, p] : options.material_dropout) materials[std::to_string(obj_id)] = p;
+  json["material_dropout"] = materials;
+  json["registration_dx_px"] = options.registration_dx_px;
+  json["registration_dy_px"] = options.registration_dy_px;
+  json["registration_sigma_px"] = options.registration_sigma_px;
+  json["misfit_translation_sigma_m"] = options.misfit_translation_sigma_m;
+  json["misfit_rotation_sigma_deg"] = options.misfit_rotation_sigma_deg;
   return json;
+}
+
+Eigen::Vector2d draw_registration_offset(const SensorOptions& options, std::mt19937_64& rng) {
+  Eigen::Vector2d offset(options.registration_dx_px, options.registration_dy_px);
+  if (options.registration_sigma_px > 0) {
+    std::normal_distribution<double> gaussian(0.0, options.registration_sigma_px);
+    offset.x() += gaussian(rng);
+    offset.y() += gaussian(rng);
+  }
+  return offset;
+}
+
+Eigen::Isometry3d draw_model_misfit(const SensorOptions& options, std::mt19937_64& rng) {
+  Eigen::Isometry3d misfit = Eigen::Isometry3d::Identity();
+  if (!options.has_misfit()) return misfit;
+  std::normal_distribution<double> gaussian(0.0, 1.0);
+  Eigen::Vector3d translation, rotation;
+  for (int k = 0; k < 3; ++k) translation[k] = options.misfit_translation_sigma_m * gaussian(rng);
+  for (int k = 0; k < 3; ++k) {
+    rotation[k] = options.misfit_rotation_sigma_deg * kPi / 180.0 * gaussian(rng);
+  }
+  const double angle = rotation.norm();
+  if (angle > 0) misfit.linear() = Eigen::AngleAxisd(angle, rotation / angle).toRotationMatrix();
+  misfit.translation() = translation;
+  return misfit;
 }
 
 cv::Mat apply_sensor(const cv::Mat& clean_depth_m, const Camera& camera,
                      const SensorOptions& options, std::mt19937_64& rng) {
+  return apply_sensor(clean_depth_m, cv::Mat(), {}, camera, options,
+                      Eigen::Vector2d(options.registration_dx_px, options.registration_dy_px), rng);
+}
+
+cv::Mat apply_sensor(const cv::Mat& clean_depth_m, const cv::Mat& labels,
+                     const std::vector<int>& label_obj_ids, const Camera& camera,
+                     const SensorOptions& options, const Eigen::Vector2d& registration_px,
+                     std::mt19937_64& rng) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument(why);
   if (clean_depth_m.type() != CV_32F) {
     throw std::invalid_argument("apply_sensor needs a CV_32F depth image");
   }
+  const bool materials = !options.material_dropout.empty();
+  if (materials && (labels.type() != CV_32S || labels.size() != clean_depth_m.size())) {
+    throw std::invalid_argument(
+        "apply_sensor: material dropout needs a CV_32S label image of the depth's size");
+  }
+  // The depth (and labels) as the misregistered depth camera sees them.
+  const int dx = static_cast<int>(std::lround(registration_px.x()));
+  const int dy = static_cast<int>(std::lround(registration_px.y()));
+  const bool moved = dx != 0 || dy != 0;
+  const cv::Mat source = moved ? shifted(clean_depth_m, dx, dy) : clean_depth_m;
+  const cv::Mat source_labels = materials && moved ? shifted(labels, dx, dy) : labels;
+  std::vector<double> label_dropout;
+  if (materials) {
+    label_dropout.assign(label_obj_ids.size(), 0.0);
+    for (std::size_t label = 1; label < label_obj_ids.size(); ++label) {
+      const auto found = options.material_dropout.find(label_obj_ids[label]);
+      if (found != options.material_dropout.end()) label_dropout[label] = found->second;
+    }
+  }
+  const cv::Mat shadow = options.occlusion_shadow
+                             ? occlusion_shadow(source, camera.fx() * options.disparity_baseline_m)
+                             : cv::Mat();
   const double cos_max_incidence = std::cos(options.max_incidence_deg * kPi / 180.0);
+  const bool lateral = options.lateral_sigma_px > 0;
+  const bool flying = options.flying_pixel_probability > 0;
+  const bool need_normal = options.max_incidence_deg < 90 || options.noise_angle_m > 0;
+  const double disparity_scale = options.disparity_focal_px * options.disparity_baseline_m;
   std::normal_distribution<double> gaussian(0.0, 1.0);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   cv::Mat measured(clean_depth_m.size(), CV_32F, cv::Scalar(0));
-  for (int v = 0; v < clean_depth_m.rows; ++v) {
-    for (int u = 0; u < clean_depth_m.cols; ++u) {
-      const double z = clean_depth_m.at<float>(v, u);
-      // Draw the same number of variates per pixel so one pixel's fate never shifts the
-      // noise of the next.
+  for (int v = 0; v < source.rows; ++v) {
+    for (int u = 0; u < source.cols; ++u) {
+      // Draw the same number of variates per pixel (it depends on the options only) so one
+      // pixel's fate never shifts the noise of the next.
       const double noise = gaussian(rng);
       const double edge_draw = unit(rng);
       const double random_draw = unit(rng);
+      const double lateral_du = lateral ? options.lateral_sigma_px * gaussian(rng) : 0.0;
+      const double lateral_dv = lateral ? options.lateral_sigma_px * gaussian(rng) : 0.0;
+      const double flying_draw = flying ? unit(rng) : 1.0;
+      const double flying_mix = flying ? unit(rng) : 0.0;
+      const double material_draw = materials ? unit(rng) : 1.0;
+      // The surface point this pixel returns: its own, or with lateral noise a neighbour's
+      // across a depth edge.
+      int pu = u, pv = v;
+      double z = source.at<float>(v, u);
+      if (lateral) {
+        const int nu = static_cast<int>(std::lround(u + lateral_du));
+        const int nv = static_cast<int>(std::lround(v + lateral_dv));
+        if (nu >= 0 && nv >= 0 && nu < source.cols && nv < source.rows) {
+          const double nz = source.at<float>(nv, nu);
+          if (std::abs(nz - z) > options.edge_jump_m) {
+            pu = nu;
+            pv = nv;
+            z = nz;
+          }
+        }
+      }
       if (!(z > 0) || z < options.min_range_m || z > options.max_range_m) continue;
       if (random_draw < options.random_dropout) continue;
-      if (options.edge_dropout > 0 && edge_draw < options.edge_dropout &&
-          on_depth_edge(clean_depth_m, u, v, options.edge_jump_m)) {
-        continue;
+      if (!shadow.empty() && shadow.at<std::uint8_t>(pv, pu)) continue;
+      if (materials) {
+        const int label = source_labels.at<int>(pv, pu);
+        if (label > 0 && label < static_cast<int>(label_dropout.size()) &&
+            material_draw < label_dropout[static_cast<std::size_t>(label)]) {
+          continue;
+        }
       }
-      if (options.max_incidence_deg < 90) {
-        const Eigen::Vector3d normal =
-            surface_normal(clean_depth_m, camera, u, v, options.edge_jump_m);
-        const Eigen::Vector3d ray = back_project(camera, u, v, z).normalized();
-        if (normal.isZero() || std::abs(normal.dot(ray)) < cos_max_incidence) continue;
+      // Edge test only for pixels whose draws make it matter (it reads four neighbours).
+      int edge = -1;  // unknown
+      const auto on_edge = [&] {
+        if (edge < 0) edge = on_depth_edge(source, pu, pv, options.edge_jump_m) ? 1 : 0;
+        return edge == 1;
+      };
+      if (options.edge_dropout > 0 && edge_draw < options.edge_dropout && on_edge()) continue;
+      double theta = 0;
+      if (need_normal) {
+        const Eigen::Vector3d normal = surface_normal(source, camera, pu, pv, options.edge_jump_m);
+        const Eigen::Vector3d ray = back_project(camera, pu, pv, z).normalized();
+        const double cosine = std::abs(normal.dot(ray));
+        if (options.max_incidence_deg < 90 && (normal.isZero() || cosine < cos_max_incidence)) {
+          continue;
+        }
+        if (options.noise_angle_m > 0 && !normal.isZero()) theta = std::acos(std::min(1.0, cosine));
       }
-      double noisy = z + options.sigma(z) * noise;
+      if (flying_draw < options.flying_pixel_probability && on_edge()) {
+        const double across = across_edge_neighbour(source, pu, pv, options.edge_jump_m);
+        if (across > 0) z += flying_mix * (across - z);
+      }
+      double noisy = z + options.sigma(z, theta) * noise;
+      if (options.disparity_step_px > 0 && noisy > 0) {
+        const double disparity = std::round(disparity_scale / noisy / options.disparity_step_px) *
+                                 options.disparity_step_px;
+        noisy = disparity > 0 ? disparity_scale / disparity : 0.0;
+      }
       if (options.quantisation_m > 0) {
         noisy = std::round(noisy / options.quantisation_m) * options.quantisation_m;
       }

@@ -264,6 +264,43 @@ TEST_F(GeneratorCli, ImpossibleRequestsFailFastNamingTheLimit) {
   EXPECT_FALSE(fs::exists(*root_ / "never" / "test"));
 }
 
+TEST_F(GeneratorCli, SensorPresetIsRecordedAndOptionsOverrideIt) {
+  const fs::path plain = *root_ / "sensor_default";
+  const fs::path xtion = *root_ / "sensor_xtion";
+  ASSERT_EQ(run_merged(small_dataset(plain, 2)).exit_code, 0);
+  const CommandRun run = run_merged(small_dataset(xtion, 2) +
+                                    " --sensor xtion --noise-a 0.002 --material-dropout "
+                                    "coffee:0.5,3:0.25");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const nlohmann::json sensor = read_json(xtion / "sensor.json");
+  EXPECT_EQ(sensor["preset"], "xtion");
+  EXPECT_EQ(sensor["noise_a_m"], 0.002);       // the option over the preset
+  EXPECT_EQ(sensor["noise_b_per_m"], 0.0019);  // the preset's (Nguyen et al. 2012)
+  EXPECT_EQ(sensor["disparity_baseline_m"], 0.075);
+  EXPECT_EQ(sensor["material_dropout"], nlohmann::json({{"1", 0.5}, {"3", 0.25}}));
+  EXPECT_EQ(read_json(plain / "sensor.json")["preset"], "default");
+  // The observation is rendered from misfit models: GT and scene graphs stay, depth changes.
+  for (const char* file : {"scene_gt.json", "scene_graph.json", "scene_camera.json"}) {
+    EXPECT_EQ(read_text(plain / "test" / "000001" / file),
+              read_text(xtion / "test" / "000001" / file))
+        << file;
+  }
+  EXPECT_NE(read_text(plain / "test" / "000001" / "depth" / "000000.png"),
+            read_text(xtion / "test" / "000001" / "depth" / "000000.png"));
+
+  const std::string out = "--out \"" + (*root_ / "never").string() + "\" --quiet";
+  const CommandRun unknown = run_merged("generate " + out + " --sensor nope");
+  EXPECT_EQ(unknown.exit_code, 2);
+  for (const char* name : {"nope", "default", "kinect-v1", "xtion", "d415", "d435"}) {
+    EXPECT_NE(unknown.output.find(name), std::string::npos) << unknown.output;
+  }
+  const CommandRun bad_material = run_merged("generate " + out + " --material-dropout mug:0.5");
+  EXPECT_EQ(bad_material.exit_code, 2);
+  EXPECT_NE(bad_material.output.find("--material-dropout"), std::string::npos)
+      << bad_material.output;
+  EXPECT_FALSE(fs::exists(*root_ / "never"));
+}
+
 TEST_F(GeneratorCli, NonEmptyOutIsRefusedAndOverwriteReplacesTheWholeDataset) {
   const fs::path notes = *root_ / "notes";
   fs::create_directories(notes);

@@ -425,6 +425,29 @@ TEST_F(EstimateGl, WithoutGraphAndDepthInfersTheGraphAndSimulatesTheSensor) {
   EXPECT_GE(counts.at("estimated").get<int>(), 6);
 }
 
+TEST_F(EstimateGl, SyntheticObservationTakesASensorPreset) {
+  const fs::path plain = fresh_dir("estimate_sensor_default");
+  const fs::path xtion = fresh_dir("estimate_sensor_xtion");
+  const std::string common = " --observation synthetic --no-time" + kFast;
+  ASSERT_EQ(
+      run_merged("estimate " + dataset_->string() + " --out " + plain.string() + common).exit_code,
+      0);
+  const CommandRun result = run_merged("estimate " + dataset_->string() + " --out " +
+                                       xtion.string() + common + " --sensor xtion");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  // Another observation (noise model, misfit models): other estimates, and a folder of one
+  // sensor does not resume with another.
+  EXPECT_NE(read_file(plain / "estimates.csv"), read_file(xtion / "estimates.csv"));
+  const CommandRun mixed = run_merged("estimate " + dataset_->string() + " --out " +
+                                      plain.string() + common + " --sensor xtion");
+  EXPECT_NE(mixed.exit_code, 0) << mixed.output;
+  const CommandRun unknown =
+      run_merged("estimate " + dataset_->string() + " --out " +
+                 fresh_dir("estimate_sensor_nope").string() + common + " --sensor nope");
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_NE(unknown.output.find("kinect-v1"), std::string::npos) << unknown.output;
+}
+
 // generate --hidden: the synthetic detector gives every completely hidden object its amodal box,
 // so each gets an estimate, placed through the graph (the tray's support and the box's
 // silhouette), and none is confident while more than 2 cm off; with --no-amodal they have no

@@ -91,6 +91,7 @@ std::vector<fs::path> generate_sets(const BenchCalibrationArguments& arguments,
     options.layout.hide_objects = arguments.hidden;
     options.scenes = arguments.scenes;
     options.seed = arguments.seed;
+    options.sensor = arguments.estimate.sensor;
     options.quiet = true;
     const GenerateSummary summary = generate_dataset(options);
     if (!arguments.quiet) {
@@ -315,7 +316,11 @@ void run_bench(BenchCalibrationArguments arguments) {
     source = "generated tray, shelf and pile scenes (" + std::to_string(arguments.scenes) +
              " each, seed " + std::to_string(arguments.seed) + ", " +
              std::to_string(arguments.objects) + " objects, " + std::to_string(arguments.hidden) +
-             " hidden)";
+             " hidden" +
+             (arguments.estimate.sensor.preset == "default"
+                  ? std::string()
+                  : ", sensor " + arguments.estimate.sensor.preset) +
+             ")";
   } else {
     for (const std::string& dataset : arguments.datasets) sets.push_back(dataset);
     source = std::to_string(sets.size()) + " dataset" + (sets.size() > 1 ? "s" : "");

@@ -389,6 +389,8 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
   if (e.amodal_below_score) job.fingerprint["amodal_below_score"] = *e.amodal_below_score;
   if (e.observation == Observation::kSynthetic) {
     job.fingerprint["observation"] = to_string(e.observation);
+    // Default sensor adds nothing, so that folders of earlier runs keep resuming.
+    if (e.sensor.preset != "default") job.fingerprint["sensor"] = datasets::to_json(e.sensor);
   } else {
     add_depth_check_fingerprint(e.depth, &job.fingerprint);
   }
@@ -469,6 +471,9 @@ void add_estimator_options(CLI::App& command, EstimateOptions& e) {
           "measured (default): the dataset's depth images, an image without one fails; "
           "synthetic: depth synthesised from the GT render through the sensor model")
       ->check(CLI::IsMember({"measured", "synthetic"}));
+  add_sensor_preset_option(command, &e.sensor,
+                           "the sensor of synthesised depth (--observation synthetic; bench "
+                           "calibration: also of its generated scenes)");
   add_depth_check_options(command, &e.depth);
   command
       .add_option_function<std::string>(

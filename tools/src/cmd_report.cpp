@@ -65,6 +65,7 @@ const std::vector<StepOption>& step_options() {
        "estimate: leave times empty, so every output is byte-reproducible"},
       {"estimate", "--observation", false,
        "estimate: measured (default; an image without depth fails) or synthetic"},
+      {"estimate", "--sensor", false, "estimate: sensor preset of --observation synthetic"},
       {"both", "--depth-scale", false,
        "visibility (BOP modes) and estimate: mm per depth PNG unit for every image"},
       {"both", "--no-depth-check", true,

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "generate_pipeline.hpp"
 #include "output_folder.hpp"
 
 namespace clutterscope::tools {
@@ -322,6 +323,10 @@ class Simulation {
     summary["observation"] =
         "synthetic: the current scene rendered from the dataset's camera through the sensor "
         "model, detections from the synthetic detector, a new random stream each round";
+    // The default sensor adds nothing, so that summaries keep their bytes.
+    if (arguments_.estimate.sensor.preset != "default") {
+      summary["sensor"] = datasets::to_json(arguments_.estimate.sensor);
+    }
     summary["stop"] = simulation::to_string(result.stop);
     summary["rounds"] = result.rounds.size();
     summary["picks"] = result.picks;
@@ -460,6 +465,7 @@ void add_simulate_command(CLI::App& app, int* exit_code) {
       "OUT/compare.csv");
   EstimateOptions& e = arguments->estimate;
   add_nbp_options(*command, e);
+  add_sensor_preset_option(*command, &e.sensor, "the sensor of each round's observation");
   command->add_option("--seed", e.seed, "random seed (one stream per round)")
       ->capture_default_str();
   command->add_flag("--quiet", arguments->quiet, "print nothing on success");

@@ -294,9 +294,20 @@ GenerateSummary write_dataset(const GenerateOptions& options,
       throw UsageError("scene " + std::to_string(scene_id) + ": " + error.what());
     }
     std::vector<std::array<std::uint8_t, 3>> label_colours = {{0, 0, 0}};
+    std::vector<int> label_obj_ids = {0};
     std::vector<datasets::DetectorInstance> detector_instances;
+    // Per scene (one camera, one set of physical objects): the depth-to-colour offset and
+    // each object's model misfit, model frame -> the observed object's frame.
+    std::mt19937_64 registration_rng =
+        datasets::derive_rng(options.seed, scene_id, kRegistrationTask);
+    const Eigen::Vector2d registration =
+        datasets::draw_registration_offset(options.sensor, registration_rng);
+    std::mt19937_64 misfit_rng = datasets::derive_rng(options.seed, scene_id, kMisfitTask);
+    std::vector<Eigen::Isometry3d> misfits;
     for (const auto& object : scene.objects) {
       label_colours.push_back(catalogue[object.item].colour);
+      label_obj_ids.push_back(object.obj_id);
+      misfits.push_back(datasets::draw_model_misfit(options.sensor, misfit_rng));
       detector_instances.push_back({object.obj_id, 0, object.fixed, {}});
       summary.deepest_stack = std::max(summary.deepest_stack, object.level);
     }
@@ -332,10 +343,22 @@ GenerateSummary write_dataset(const GenerateOptions& options,
           ++summary.partly_visible;
         }
       }
+      // The observation (depth, rgb) is rendered from the misfit models; GT, masks and
+      // visibility stay with the models written to models/.
+      render::DepthLabelImage misfit_render;
+      if (options.sensor.has_misfit()) {
+        std::vector<render::Instance> observed = instances;
+        for (std::size_t i = 0; i < observed.size(); ++i) {
+          observed[i].model_to_camera = observed[i].model_to_camera * misfits[i];
+        }
+        misfit_render = renderer.render(intrinsics, observed);
+      }
+      const render::DepthLabelImage& seen = options.sensor.has_misfit() ? misfit_render : clean;
       std::mt19937_64 sensor_rng = datasets::derive_rng(options.seed, scene_id, kSensorTask + view);
-      image.depth_m = datasets::apply_sensor(clean.depth, camera, options.sensor, sensor_rng);
+      image.depth_m = datasets::apply_sensor(seen.depth, seen.labels, label_obj_ids, camera,
+                                             options.sensor, registration, sensor_rng);
       if (options.rgb) {
-        image.rgb = datasets::shade_labels(clean.depth, clean.labels, camera, label_colours);
+        image.rgb = datasets::shade_labels(seen.depth, seen.labels, camera, label_colours);
       }
       std::mt19937_64 detector_rng =
           datasets::derive_rng(options.seed, scene_id, kDetectorTask + view);

@@ -14,16 +14,20 @@
 #include <clutterscope/render/renderer.hpp>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 
 namespace clutterscope::tools {
 
 // Random stream tasks of a scene (datasets::derive_rng): layout, then per view sensor and
-// detector. `clutterscope detect` with the generator's seed reproduces its detections.
+// detector, then per scene the sensor's registration offset and the models' misfit.
+// `clutterscope detect` with the generator's seed reproduces its detections.
 constexpr std::uint64_t kLayoutTask = 0;
 constexpr std::uint64_t kSensorTask = 1000;
 constexpr std::uint64_t kDetectorTask = 2000;
+constexpr std::uint64_t kRegistrationTask = 3000;
+constexpr std::uint64_t kMisfitTask = 3001;
 
 struct GenerateOptions {
   std::filesystem::path out;
@@ -70,6 +74,24 @@ render::Mesh to_render_mesh(const datasets::TriangleMesh& mesh);
 // The synthetic detector's options (--box-jitter, --score-floor, ...), shared by generate and
 // detect.
 void add_detector_options(CLI::App& command, datasets::DetectorOptions* detector);
+
+// generate's --sensor PRESET and the per-field options (--noise-a, ...): after parsing,
+// resolve() is the preset with every field option given on the command line applied over it.
+// Unknown presets are refused by CLI11 (exit 2) with the list of presets.
+class SensorArguments {
+ public:
+  void add_to(CLI::App& command);
+  datasets::SensorOptions resolve() const;
+
+ private:
+  std::string preset_ = "default";
+  std::vector<std::function<void(datasets::SensorOptions&)>> overrides_;
+};
+
+// --sensor PRESET alone (estimate, simulate, bench calibration): `sensor` becomes the preset.
+// `what` says what the sensor synthesises in that command.
+void add_sensor_preset_option(CLI::App& command, datasets::SensorOptions* sensor,
+                              const std::string& what);
 
 // The amodal-box options alone (--no-amodal, --amodal-score, --amodal-jitter): part of
 // add_detector_options, and the options of estimate's synthetic detector.

@@ -265,6 +265,7 @@ bool EstimateOptions::IsValid(std::string* why) const {
     if (why) *why = message;
     return false;
   };
+  if (!sensor.IsValid(why)) return false;
   if (particles < 2) return fail("--particles must be >= 2");
   if (iterations < 1) return fail("--iterations must be >= 1");
   if (gibbs_sweeps < 1) return fail("--gibbs-sweeps must be >= 1");
@@ -406,9 +407,28 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
       datasets::check_depth_scale(depth, clean.depth, scaled.camera.depth_scale, options.depth,
                                   view.depth_path, where);
     } else {
+      // The observation from misfit models (GT, labels and visibility keep the models), with
+      // this camera's depth-to-colour offset; both drawn per image.
+      render::DepthLabelImage misfit_render;
+      if (options.sensor.has_misfit()) {
+        std::mt19937_64 misfit_rng = item_rng(options.seed, view.key, "model misfit");
+        std::vector<render::Instance> observed = render::scene_instances(view, s.models);
+        for (render::Instance& instance : observed) {
+          instance.model_to_camera =
+              instance.model_to_camera * datasets::draw_model_misfit(options.sensor, misfit_rng);
+        }
+        misfit_render = s.renderer.render(image, observed);
+      }
+      const render::DepthLabelImage& seen = options.sensor.has_misfit() ? misfit_render : clean;
+      std::vector<int> label_obj_ids = {0};
+      for (const datasets::GtInstance& object : view.objects)
+        label_obj_ids.push_back(object.obj_id);
+      std::mt19937_64 registration_rng = item_rng(options.seed, view.key, "sensor registration");
+      const Eigen::Vector2d registration =
+          datasets::draw_registration_offset(options.sensor, registration_rng);
       std::mt19937_64 sensor_rng = item_rng(options.seed, view.key, "sensor");
-      depth =
-          datasets::apply_sensor(clean.depth, view.camera, datasets::SensorOptions{}, sensor_rng);
+      depth = datasets::apply_sensor(seen.depth, seen.labels, label_obj_ids, view.camera,
+                                     options.sensor, registration, sensor_rng);
     }
   }
   // Visibility of each GT instance (evaluation, and the synthetic detector's silhouettes).

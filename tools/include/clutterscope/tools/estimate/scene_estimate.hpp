@@ -26,6 +26,7 @@
 #include <clutterscope/datasets/depth_check.hpp>
 #include <clutterscope/datasets/detector.hpp>
 #include <clutterscope/datasets/scene.hpp>
+#include <clutterscope/datasets/sensor.hpp>
 #include <clutterscope/estimator/mixture.hpp>
 #include <clutterscope/estimator/nbp.hpp>
 #include <clutterscope/estimator/scorer.hpp>
@@ -54,6 +55,9 @@ std::string to_string(NonContactForm form);  // "oriented", "aabb"
 
 struct EstimateOptions {
   Observation observation = Observation::kMeasured;
+  // Synthetic observations: the sensor model (--sensor PRESET) the GT render goes through,
+  // with its depth-to-colour offset and model misfit drawn per image.
+  datasets::SensorOptions sensor;
   datasets::DepthCheckOptions depth;  // measured observations: --depth-scale, --no-depth-check
   int particles = 100;                // M
   int iterations = 15;                // NBP iterations
