@@ -2,6 +2,7 @@
 
 #include <clutterscope/datasets/generator.hpp>
 #include <clutterscope/datasets/sensor.hpp>
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <string>
@@ -285,6 +286,74 @@ TEST(Sensor, LateralNoiseMovesEdgesAndKeepsFlatSurfaces) {
     for (int u : {36, 50, 63}) EXPECT_EQ(measured.at<float>(v, u), 1.5f);
   }
   EXPECT_NEAR(crossed / 400.0, p, 5 * std::sqrt(p * (1 - p) / 400));
+}
+
+// On a ramp z = z0 + s u (no edge) the bilinear lookup is exact, so the axial error is s du:
+// standard deviation s sigma_L, in image pixels scaled by fx / disparity focal length.
+TEST(Sensor, LateralNoiseOnASlopeIsTheSlopeTimesTheOffset) {
+  Camera camera = default_camera(64, 400);
+  cv::Mat clean(400, 64, CV_32F);
+  const double slope = 0.004;  // metres per pixel, under the 2 cm edge jump
+  for (int v = 0; v < 400; ++v)
+    for (int u = 0; u < 64; ++u) clean.at<float>(v, u) = static_cast<float>(1.0 + slope * u);
+  SensorOptions options = quiet_sensor();
+  options.lateral_sigma_px = 0.8;
+  for (const double focal_ratio : {1.0, 2.0}) {
+    options.disparity_focal_px = focal_ratio == 1.0 ? 0.0 : camera.fx() / focal_ratio;
+    options.disparity_baseline_m = focal_ratio == 1.0 ? 0.0 : 0.075;
+    std::mt19937_64 rng(11);
+    const cv::Mat measured = apply_sensor(clean, camera, options, rng);
+    double sum_sq = 0;
+    int n = 0;
+    for (int v = 2; v < 398; ++v) {
+      for (int u = 8; u < 56; ++u) {
+        const double error = measured.at<float>(v, u) - clean.at<float>(v, u);
+        sum_sq += error * error;
+        ++n;
+      }
+    }
+    const double expected = slope * options.lateral_sigma_px * focal_ratio;
+    EXPECT_NEAR(std::sqrt(sum_sq / n), expected, 5 * expected / std::sqrt(2.0 * n))
+        << "focal ratio " << focal_ratio;
+  }
+}
+
+// A vertical step edge between columns 31 and 32: column 31 - d lies d pixels from the edge, so
+// within the matching window its share of lost returns is p (1 - d / w) and its extra noise
+// sigma (1 - d / w); beyond the window, neither.
+TEST(Sensor, MatchingWindowLossAndNoiseTaperFromTheEdge) {
+  const Camera camera = default_camera(64, 2000);
+  cv::Mat clean(2000, 64, CV_32F, cv::Scalar(1.0f));
+  clean.colRange(32, 64).setTo(1.5f);
+  SensorOptions options = quiet_sensor();
+  options.window_half_px = 4;
+  options.window_dropout = 0.4;
+  options.window_sigma_m = 0.01;
+  std::mt19937_64 rng(12);
+  const cv::Mat measured = apply_sensor(clean, camera, options, rng);
+  for (int d = 0; d <= 5; ++d) {
+    const double taper = std::max(0.0, 1.0 - d / 4.0);
+    int lost = 0, n = 0;
+    double sum_sq = 0;
+    for (int v = 0; v < 2000; ++v) {
+      const float z = measured.at<float>(v, 31 - d);
+      if (!(z > 0)) {
+        ++lost;
+        continue;
+      }
+      sum_sq += (z - 1.0) * (z - 1.0);
+      ++n;
+    }
+    const double p = options.window_dropout * taper;
+    EXPECT_NEAR(lost / 2000.0, p, 5 * std::sqrt(std::max(p * (1 - p), 1e-4) / 2000)) << d;
+    const double sigma = options.window_sigma_m * taper;
+    EXPECT_NEAR(std::sqrt(sum_sq / n), sigma, 5 * std::max(sigma, 1e-9) / std::sqrt(2.0 * n))
+        << d;
+  }
+  // The far side of the edge alike: column 32 + d.
+  int lost_right = 0;
+  for (int v = 0; v < 2000; ++v) lost_right += measured.at<float>(v, 32) > 0 ? 0 : 1;
+  EXPECT_NEAR(lost_right / 2000.0, 0.4, 5 * std::sqrt(0.24 / 2000));
 }
 
 TEST(Sensor, MisregistrationShiftsAStepEdgeByTheOffset) {

@@ -34,6 +34,7 @@ void add_commands(CLI::App& app, int* exit_code) {
   add_report_command(app, exit_code);
   add_thresholds_command(app, exit_code);
   add_simulate_command(app, exit_code);
+  add_sensor_fit_command(app, exit_code);
   add_notebook_command(app, exit_code);
 }
 

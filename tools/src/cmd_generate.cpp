@@ -109,6 +109,13 @@ void SensorArguments::add_to(CLI::App& command) {
   field("--max-range", &SensorOptions::max_range_m, "farthest return (m)");
   field("--lateral-sigma", &SensorOptions::lateral_sigma_px,
         "lateral noise at depth edges, sigma (px)");
+  field("--window-half", &SensorOptions::window_half_px,
+        "half the matching window (sensor px): returns within it of a depth edge are lost and "
+        "noisier, tapering to the window's edge");
+  field("--window-dropout", &SensorOptions::window_dropout,
+        "probability of no return at a depth edge within the matching window");
+  field("--window-sigma", &SensorOptions::window_sigma_m,
+        "extra axial sigma at a depth edge within the matching window (m)");
   field("--flying-pixels", &SensorOptions::flying_pixel_probability,
         "probability that a depth-edge pixel mixes foreground and background depth");
   command

@@ -33,5 +33,6 @@ void add_bench_calibration_command(CLI::App& app, int* exit_code);
 void add_report_command(CLI::App& app, int* exit_code);
 void add_thresholds_command(CLI::App& app, int* exit_code);
 void add_simulate_command(CLI::App& app, int* exit_code);
+void add_sensor_fit_command(CLI::App& app, int* exit_code);
 
 }  // namespace clutterscope::tools

@@ -17,6 +17,7 @@
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 
 namespace clutterscope::tools {
 
@@ -80,11 +81,13 @@ void add_detector_options(CLI::App& command, datasets::DetectorOptions* detector
 // Unknown presets are refused by CLI11 (exit 2) with the list of presets.
 class SensorArguments {
  public:
+  explicit SensorArguments(std::string default_preset = "default")
+      : preset_(std::move(default_preset)) {}
   void add_to(CLI::App& command);
   datasets::SensorOptions resolve() const;
 
  private:
-  std::string preset_ = "default";
+  std::string preset_;
   std::vector<std::function<void(datasets::SensorOptions&)>> overrides_;
 };
 

@@ -11,6 +11,7 @@
 
 #include <Eigen/Geometry>
 #include <clutterscope/datasets/scene.hpp>
+#include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/core.hpp>
@@ -56,10 +57,20 @@ struct SensorOptions {
   double min_range_m = 0.3;         // returns outside [min, max] range are missing
   double max_range_m = 6.0;
 
-  // Lateral noise (Nguyen et al. 2012: sigma_L ~ 0.8 px at edges): each pixel looks up the
-  // clean depth at a Gaussian offset of this sigma (pixels) and takes it only where that pixel
-  // lies across a depth edge, so edges move by a fraction of a pixel and flat surfaces are kept.
+  // Lateral noise (Nguyen et al. 2012: sigma_L ~ 0.8 px): each pixel returns the clean depth at
+  // a Gaussian offset of this sigma (pixels of the depth sensor, disparity_focal_px; scaled by
+  // camera fx / disparity_focal_px where that is set), interpolated within its surface, or the
+  // other surface's across a depth edge: edges move by a fraction of a pixel, sloped surfaces
+  // gain axial error (slope x offset), frontal ones are kept.
   double lateral_sigma_px = 0.0;
+  // The matching window of structured light and stereo: a pixel whose correlation window
+  // straddles a depth edge, i.e. within window_half_px of one (pixels of the depth sensor,
+  // scaled as lateral_sigma_px), loses its return with probability window_dropout and gains
+  // axial noise of sigma window_sigma_m, both tapering linearly from the edge to 0 at
+  // window_half_px. 0 = off.
+  double window_half_px = 0.0;
+  double window_dropout = 0.0;
+  double window_sigma_m = 0.0;
   // Probability that a depth-edge pixel with a return is a flying pixel: its depth is
   // interpolated (uniformly) between its own and the neighbour's across the edge.
   double flying_pixel_probability = 0.0;
@@ -126,6 +137,17 @@ cv::Mat apply_sensor(const cv::Mat& clean_depth_m, const cv::Mat& labels,
                      const std::vector<int>& label_obj_ids, const Camera& camera,
                      const SensorOptions& options, const Eigen::Vector2d& registration_px,
                      std::mt19937_64& rng);
+
+// The model misfit a dataset's sensor.json (written by generate) declares: its
+// misfit_translation_sigma_m and misfit_rotation_sigma_deg, 0 where absent (datasets generated
+// before the misfit existed). parse_ throws DatasetError naming `path` and the field for
+// malformed JSON, a value that is not a number or one outside [0, 0.1] m / [0, 10] degrees.
+struct DeclaredMisfit {
+  double translation_sigma_m = 0;
+  double rotation_sigma_deg = 0;
+};
+DeclaredMisfit parse_sensor_misfit(const std::string& text, const std::filesystem::path& path);
+DeclaredMisfit read_sensor_misfit(const std::filesystem::path& path);
 
 // Flat-shaded colour image (CV_8UC3 BGR): each label's colour (RGB, index = label, 0 the
 // background) times a Lambertian term from the clean depth's surface normals, light at the camera.
