@@ -201,4 +201,14 @@ Eigen::Matrix3d fused_covariance(const Eigen::Matrix3d& fit_spread,
   return fit_spread + noise;
 }
 
+Eigen::Matrix3d model_misfit_covariance(double translation_sigma_m, double rotation_sigma_rad,
+                                        double radius_m) {
+  for (const double value : {translation_sigma_m, rotation_sigma_rad, radius_m})
+    if (!(value >= 0) || !std::isfinite(value))
+      throw std::invalid_argument("model misfit sigmas and radius must be finite and >= 0");
+  const double rotation = rotation_sigma_rad * radius_m;
+  return (translation_sigma_m * translation_sigma_m + 2.0 / 3.0 * rotation * rotation) *
+         Eigen::Matrix3d::Identity();
+}
+
 }  // namespace clutterscope::estimator

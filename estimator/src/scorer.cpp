@@ -73,6 +73,26 @@ double pixel_cost(const BoxObservation& o, const std::vector<float>& synthetic_d
   return total;
 }
 
+FreeSpaceCount count_free_space_violations(const BoxObservation& o,
+                                           const std::vector<float>& synthetic_depth,
+                                           double tolerance) {
+  const int gw = grid_size(o.width, o.stride), gh = grid_size(o.height, o.stride);
+  if (synthetic_depth.size() != static_cast<size_t>(gw) * gh)
+    throw std::invalid_argument("free space: the synthetic depth is not the scoring grid");
+  if (!(tolerance >= 0)) throw std::invalid_argument("free space: tolerance must be >= 0");
+  FreeSpaceCount count;
+  for (int j = 0; j < gh; ++j) {
+    for (int i = 0; i < gw; ++i) {
+      const float observed = o.depth[static_cast<size_t>(j) * o.stride * o.width + i * o.stride];
+      const float synthetic = synthetic_depth[static_cast<size_t>(j) * gw + i];
+      if (!(observed > 0) || !(synthetic > 0)) continue;
+      ++count.overlap;
+      if (observed > synthetic + tolerance) ++count.seen_through;
+    }
+  }
+  return count;
+}
+
 PointSplatScorer::PointSplatScorer(const PixelCostOptions& options) : options_(options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("pixel cost: " + why);

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/generator.hpp>
 #include <clutterscope/datasets/sensor.hpp>
 #include <algorithm>
@@ -463,6 +464,28 @@ TEST(Sensor, PresetsAreValidDistinctAndRecorded) {
     const std::string message = error.what();
     EXPECT_NE(message.find("nope"), std::string::npos);
     for (const std::string& name : names) EXPECT_NE(message.find(name), std::string::npos);
+  }
+}
+
+// sensor.json as generate writes it declares the misfit; older files (no misfit keys) declare
+// none; malformed ones are refused naming the file and field.
+TEST(Sensor, SensorJsonDeclaresTheModelMisfit) {
+  const DeclaredMisfit xtion = parse_sensor_misfit(to_json(sensor_preset("xtion")).dump(), "s.json");
+  EXPECT_DOUBLE_EQ(xtion.translation_sigma_m, sensor_preset("xtion").misfit_translation_sigma_m);
+  EXPECT_DOUBLE_EQ(xtion.rotation_sigma_deg, sensor_preset("xtion").misfit_rotation_sigma_deg);
+  const DeclaredMisfit old = parse_sensor_misfit(R"({"noise_a_m": 0.0012})", "s.json");
+  EXPECT_EQ(old.translation_sigma_m, 0.0);
+  EXPECT_EQ(old.rotation_sigma_deg, 0.0);
+  for (const std::string& bad :
+       {std::string("{"), std::string("[1]"), std::string(R"({"misfit_translation_sigma_m": "2"})"),
+        std::string(R"({"misfit_translation_sigma_m": 2})"),
+        std::string(R"({"misfit_rotation_sigma_deg": -1})")}) {
+    try {
+      parse_sensor_misfit(bad, "dir/sensor.json");
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const DatasetError& error) {
+      EXPECT_NE(std::string(error.what()).find("sensor.json"), std::string::npos) << error.what();
+    }
   }
 }
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <random>
 #include <tuple>
 
@@ -109,6 +110,39 @@ TEST(Icp, FusedCovarianceAddsTheFitNoiseBoundedByTheBelief) {
   EXPECT_TRUE(rotated.isApprox(r * axis_noise.asDiagonal() * r.transpose(), 1e-9));
   EXPECT_THROW(fused_covariance(spread, Eigen::Matrix3d::Zero(), Eigen::Matrix3d::Zero()),
                std::invalid_argument);
+}
+
+// Monte Carlo of the definition: a rotation vector theta ~ N(0, s^2 I) applied to a point
+// uniform on the sphere of radius r moves it by theta x p; its per-axis spread matches the
+// closed form (2/3) s^2 r^2 within 4 standard errors of a variance estimate (sqrt(2 / n) of it
+// for a Gaussian-like spread; the product of Gaussians has heavier tails, hence 4, not 3).
+TEST(Icp, ModelMisfitCovarianceIsTheSpreadOfARotatedSurfacePoint) {
+  const double sigma = 0.01, radius = 0.08;
+  std::mt19937_64 rng(20261402);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const int n = 200000;
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d theta(sigma * normal(rng), sigma * normal(rng), sigma * normal(rng));
+    const Eigen::Vector3d p =
+        radius * Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
+    const Eigen::Vector3d moved = theta.cross(p);
+    scatter += moved * moved.transpose();
+  }
+  scatter /= n;
+  const Eigen::Matrix3d expected = model_misfit_covariance(0.0, sigma, radius);
+  const double per_axis = 2.0 / 3.0 * sigma * sigma * radius * radius;
+  EXPECT_DOUBLE_EQ(expected(0, 0), per_axis);
+  const double tolerance = 4 * std::sqrt(2.0 * 3.0 / n) * per_axis;
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(scatter(a, a), per_axis, tolerance) << "axis " << a;
+    for (int b = a + 1; b < 3; ++b) EXPECT_NEAR(scatter(a, b), 0.0, tolerance);
+  }
+  // Translation adds its variance; nothing is none.
+  EXPECT_TRUE(model_misfit_covariance(0.002, 0.0, 0.1).isApprox(4e-6 * Eigen::Matrix3d::Identity()));
+  EXPECT_TRUE(model_misfit_covariance(0.0, 0.0, 0.1).isZero());
+  EXPECT_THROW(model_misfit_covariance(-1e-3, 0.0, 0.1), std::invalid_argument);
+  EXPECT_THROW(model_misfit_covariance(0.0, std::nan(""), 0.1), std::invalid_argument);
 }
 
 TEST(Icp, NormalInformationOfAFlatFaceHasNoneAlongTheFace) {

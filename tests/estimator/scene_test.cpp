@@ -30,6 +30,27 @@ TEST(Scorer, PixelCostOfPerfectAndMissingSyntheticDepth) {
   EXPECT_NEAR(pixel_cost(o, synthetic, tau), 0 + 0.005 * ray + tau + tau, 1e-6);
 }
 
+// A 3 x 2 box at stride 2 has a 2 x 1 scoring grid: pixels (0, 0) and (2, 0) of the box.
+TEST(Scorer, FreeSpaceCountsRaysThatSeePastTheHypothesis) {
+  BoxObservation o;
+  o.camera_matrix << 100, 0, 2, 0, 100, 2, 0, 0, 1;
+  o.width = 3;
+  o.height = 2;
+  o.stride = 2;
+  o.depth = {1.05f, 9.0f, 0.99f, 9.0f, 9.0f, 9.0f};  // the grid reads 1.05 and 0.99
+  // Grid pixel 0: the sensor sees 5 cm past a surface at 1.0; pixel 1: 1 cm in front of it.
+  EXPECT_EQ(count_free_space_violations(o, {1.0f, 1.0f}, 0.02).seen_through, 1);
+  EXPECT_EQ(count_free_space_violations(o, {1.0f, 1.0f}, 0.02).overlap, 2);
+  EXPECT_DOUBLE_EQ(count_free_space_violations(o, {1.0f, 1.0f}, 0.02).share(), 0.5);
+  // Within the tolerance, or without a synthetic surface: no violation.
+  EXPECT_EQ(count_free_space_violations(o, {1.0f, 1.0f}, 0.06).seen_through, 0);
+  const FreeSpaceCount none = count_free_space_violations(o, {0.0f, 1.0f}, 0.02);
+  EXPECT_EQ(none.overlap, 1);
+  EXPECT_EQ(none.seen_through, 0);
+  EXPECT_DOUBLE_EQ(count_free_space_violations(o, {0.0f, 0.0f}, 0.02).share(), 0.0);
+  EXPECT_THROW(count_free_space_violations(o, {1.0f}, 0.02), std::invalid_argument);
+}
+
 TEST(Scorer, TruePoseScoresBestAgainstShiftedHypotheses) {
   const TestScene scene = testing::make_stacked_scene();
   std::mt19937_64 rng(4);

@@ -127,7 +127,8 @@ TEST_F(BenchCalibrationCliGl, TableAgreesWithTheRowsAndTheRowsWithEstimate) {
     const std::size_t e = estimate_row.at(rows.at(i, "scene_id") + "/" + rows.at(i, "im_id") + "/" +
                                           rows.at(i, "gt_id"));
     for (const char* column :
-         {"err_cm", "err_x_cm", "var_z_cm2", "nees", "radius95_cm", "confident", "ess_min"}) {
+         {"err_cm", "err_x_cm", "var_z_cm2", "nees", "radius95_cm", "confident", "ess_min",
+          "consistent"}) {
       EXPECT_EQ(rows.at(i, column), estimates.at(e, column)) << column << " of row " << i;
     }
     EXPECT_EQ(estimates.at(e, "confident_radius"), "");  // estimate ran without a radius
@@ -143,7 +144,9 @@ TEST_F(BenchCalibrationCliGl, TableAgreesWithTheRowsAndTheRowsWithEstimate) {
     EXPECT_NEAR(std::stod(rows.at(i, "radius95_cm")), std::sqrt(kChi2Quantile95 * max_variance),
                 1e-5 * (1 + std::sqrt(kChi2Quantile95 * max_variance)));
     EXPECT_EQ(rows.at(i, "confident_radius"),
-              std::sqrt(kChi2Quantile95 * max_variance) <= 2.0 ? "1" : "0");
+              std::sqrt(kChi2Quantile95 * max_variance) <= 2.0 && rows.at(i, "consistent") == "1"
+                  ? "1"
+                  : "0");
     if (rows.at(i, "nees").empty()) continue;
     ++with_nees;
     inside95 += std::stod(rows.at(i, "nees")) <= kChi2Quantile95;

@@ -204,14 +204,59 @@ TEST_F(EstimateGl, JobsOneAndTwoGiveByteIdenticalOutputs) {
     EXPECT_EQ(read_file(one / file), read_file(two / file)) << file;
   const auto rows = read_csv(one / "estimates.csv");
   ASSERT_GE(rows.size(), 2u);
-  EXPECT_EQ(rows[0].size(), 23u);
+  EXPECT_EQ(rows[0].size(), 26u);
   EXPECT_EQ(read_file(one / "estimates.csv").find("nan"), std::string::npos);
   int estimated = 0;
   for (std::size_t r = 1; r < rows.size(); ++r) {
-    ASSERT_EQ(rows[r].size(), 23u) << r;
+    ASSERT_EQ(rows[r].size(), 26u) << r;
     if (!rows[r][6].empty()) ++estimated;
   }
   EXPECT_GE(estimated, 6);
+}
+
+// The consistency checks decide with the variance: an estimate is confident only if its shift
+// from the belief and its seen-through share are within the limits (columns belief_shift,
+// seen_through, consistent); with a limit of ~0 no ICP-refined estimate is.
+TEST_F(EstimateGl, ConsistencyChecksGateTheConfidentDecision) {
+  const auto run_with = [&](const std::string& name, const std::string& extra) {
+    const fs::path out = fresh_dir(name);
+    const CommandRun run = run_merged("estimate " + dataset_->string() + " --out " +
+                                      out.string() + " --no-time" + kFast + extra);
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    return read_csv(out / "estimates.csv");
+  };
+  const auto defaults = run_with("consistency_default", "");
+  std::map<std::string, std::size_t> column;
+  for (std::size_t c = 0; c < defaults[0].size(); ++c) column[defaults[0][c]] = c;
+  int confident = 0;
+  for (std::size_t r = 1; r < defaults.size(); ++r) {
+    const auto& row = defaults[r];
+    if (row[column.at("var_x_cm2")].empty()) continue;
+    const bool consistent = std::stod(row[column.at("seen_through")]) <= 0.2 &&
+                            std::stod(row[column.at("belief_shift")]) <= 16.27;
+    EXPECT_EQ(row[column.at("consistent")], consistent ? "1" : "0") << r;
+    if (row[column.at("confident")] == "1") {
+      ++confident;
+      EXPECT_EQ(row[column.at("consistent")], "1") << r;
+    }
+  }
+  EXPECT_GT(confident, 0);
+  for (const std::string extra : {" --max-belief-shift 1e-12", " --max-seen-through 0"}) {
+    const auto strict = run_with(extra == " --max-seen-through 0" ? "seen" : "shift", extra);
+    for (std::size_t r = 1; r < strict.size(); ++r) {
+      const auto& row = strict[r];
+      if (row[column.at("var_x_cm2")].empty()) continue;
+      if (extra == " --max-seen-through 0" && std::stod(row[column.at("seen_through")]) == 0)
+        continue;
+      EXPECT_EQ(row[column.at("consistent")], "0") << extra << " row " << r;
+      EXPECT_EQ(row[column.at("confident")], "0") << extra << " row " << r;
+    }
+  }
+  const fs::path bad = fresh_dir("consistency_bad");
+  EXPECT_EQ(run_merged("estimate " + dataset_->string() + " --out " + bad.string() +
+                       " --max-seen-through 1.5" + kFast)
+                .exit_code,
+            2);
 }
 
 TEST_F(EstimateGl, ConfidenceRadiusDecidesFromThe95PercentEllipsoid) {
@@ -236,7 +281,9 @@ TEST_F(EstimateGl, ConfidenceRadiusDecidesFromThe95PercentEllipsoid) {
       max_variance = std::max(max_variance, std::stod(row[column.at(axis)]));
     const double radius = std::sqrt(7.814727903251178 * max_variance);
     EXPECT_NEAR(std::stod(row[column.at("radius95_cm")]), radius, 1e-5 * (1 + radius));
-    EXPECT_EQ(row[column.at("confident_radius")], radius <= 1.5 ? "1" : "0") << radius;
+    EXPECT_EQ(row[column.at("confident_radius")],
+              radius <= 1.5 && row[column.at("consistent")] == "1" ? "1" : "0")
+        << radius;
     confident_radius += row[column.at("confident_radius")] == "1";
     // nees = sum err_a^2 / var_a (empty where a variance is 0).
     // Checked where the columns' rounding (err_* to 4 decimals) stays below 1%.
@@ -400,7 +447,7 @@ TEST_F(EstimateGl, BadInputIsRecordedPerObjectWithoutNaN) {
       << summary.at("image_failures").dump();
   // Every object of image (0, 0) failed: its rows have empty numeric fields.
   for (const auto& row : read_csv(out / "estimates.csv")) {
-    EXPECT_EQ(row.size(), 23u) << "every row has the 23 columns of the header";
+    EXPECT_EQ(row.size(), 26u) << "every row has the 26 columns of the header";
     if (row[1] == "0" && row[2] == "0") {
       EXPECT_TRUE(row[6].empty());
       EXPECT_TRUE(row[9].empty());

@@ -409,7 +409,10 @@ TEST_F(ReportCli, ConfidenceRadiusReachesTheEstimatorTheReportAndThresholds) {
     const std::vector<std::string> row = fields(joined[i]);
     if (row[column("var_x_cm2")].empty()) continue;
     const double radius95 = std::stod(row[column("radius95_cm")]);
-    EXPECT_EQ(row[column("confident_radius")], radius95 <= 1.5 ? "1" : "0") << joined[i];
+    // The 95% ellipsoid within the radius, and the estimator's consistency checks passed.
+    EXPECT_EQ(row[column("confident_radius")],
+              radius95 <= 1.5 && row[column("consistent")] == "1" ? "1" : "0")
+        << joined[i];
     ++decided;
   }
   EXPECT_GT(decided, 0);

@@ -70,13 +70,15 @@ TEST_F(ReportTables, JoinedTableRoundTripsToIdenticalBytes) {
 
 TEST_F(ReportTables, ReadsTheCalibrationColumnsAndKeepsThemThroughTheJoin) {
   // estimates.csv of this version: per-axis errors, nees (empty: a zero variance),
-  // radius95_cm and confident_radius (empty without --confidence-radius-cm).
+  // radius95_cm and confident_radius (empty without --confidence-radius-cm), the consistency
+  // checks (the lemon tea failed them).
   const std::string estimates =
       "split,scene_id,im_id,gt_id,obj_id,label,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,"
       "confident,err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,"
-      "confident_radius,ess_min,time_ms\n"
-      "test,1,0,1,7,lemon tea,10.5,-20,650,1.5,0.25,3,0,2.5,4,1.5,-2,0,,4.84,0,12.5,30\n"
-      "test,1,0,0,3,coffee,1,2,700,0.01,0.02,0.005,1,0.4,1.2,0.1,-0.2,0.3,20,0.395,1,50,31\n";
+      "confident_radius,ess_min,seen_through,belief_shift,consistent,time_ms\n"
+      "test,1,0,1,7,lemon tea,10.5,-20,650,1.5,0.25,3,0,2.5,4,1.5,-2,0,,4.84,0,12.5,0.4,30,0,30\n"
+      "test,1,0,0,3,coffee,1,2,700,0.01,0.02,0.005,1,0.4,1.2,0.1,-0.2,0.3,20,0.395,1,50,0.01,1.5,"
+      "1,31\n";
   auto objects = read_objects_csv(file("objects.csv", kObjectsCsv));
   join_estimates(objects, read_estimates_csv(file("estimates.csv", estimates)),
                  dir_ / "estimates.csv");
@@ -89,13 +91,21 @@ TEST_F(ReportTables, ReadsTheCalibrationColumnsAndKeepsThemThroughTheJoin) {
   EXPECT_EQ(objects[0].estimate->confident_radius, true);
   // radius95_cm is derived from the variances: sqrt(7.8147 * 3) for the lemon tea.
   EXPECT_NEAR(lemon.radius95_cm(), 4.841919424, 1e-8);
+  // The decisions at other thresholds keep the checks: inconsistent is never confident.
+  EXPECT_FALSE(lemon.consistent);
+  EXPECT_FALSE(lemon.confident_at(100.0));
+  EXPECT_FALSE(lemon.confident_within(100.0));
+  EXPECT_TRUE(objects[0].estimate->confident_at(0.02));
+  EXPECT_FALSE(objects[0].estimate->confident_at(0.019));
 
   const std::string joined = format_objects_csv(objects);
   EXPECT_NE(joined.find(",err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,"
-                        "confident_radius,ess_min,time_ms\n"),
+                        "confident_radius,ess_min,time_ms,consistent\n"),
             std::string::npos);
   const auto path = file("joined.csv", joined);
   const auto again = read_objects_csv(path);
+  EXPECT_FALSE(again[1].estimate->consistent);
+  EXPECT_TRUE(again[0].estimate->consistent);
   EXPECT_DOUBLE_EQ(*again[0].estimate->err_z_cm, 0.3);
   EXPECT_FALSE(again[1].estimate->nees);
   EXPECT_EQ(format_objects_csv(again), joined);

@@ -184,7 +184,7 @@ void print_line(const std::string& label, const std::vector<const CalibrationRow
       confident_over_2cm += 100 * *object.error_m > 2.0;
     }
     if (radius_cm)
-      confident_radius += report::confident_within_radius(max_variance_cm2(object), *radius_cm);
+      confident_radius += confident_at_radius(object, *radius_cm);
   }
   const report::Coverage coverage = report::coverage(nees);
   const report::EssQuantiles quantiles = report::ess_quantiles(ess);
@@ -271,7 +271,7 @@ void write_csv(const std::vector<CalibrationRow>& rows,
   std::string text =
       "dataset,split,scene_id,im_id,gt_id,obj_id,visib_fract,err_cm,err_x_cm,err_y_cm,err_z_cm,"
       "var_x_cm2,var_y_cm2,var_z_cm2,nees,radius95_cm,confident,confident_radius,ess_min,"
-      "failure\n";
+      "consistent,failure\n";
   const auto& radius = arguments.estimate.confidence_radius_cm;
   for (const CalibrationRow& row : rows) {
     const ObjectEstimate& object = row.object;
@@ -285,13 +285,12 @@ void write_csv(const std::vector<CalibrationRow>& rows,
       line.add(optional_text(nees_of(object), 6));
       line.add(format_general(report::radius95_cm(max_variance_cm2(object)), 6));
       line.add(object.confident ? "1" : "0");
-      line.add(!radius                                                              ? ""
-               : report::confident_within_radius(max_variance_cm2(object), *radius) ? "1"
-                                                                                    : "0");
+      line.add(!radius ? "" : confident_at_radius(object, *radius) ? "1" : "0");
       line.add(object.effective_sample_size, 2);
+      line.add(object.consistent ? "1" : "0");
       line.add("");
     } else {
-      for (int column = 0; column < 12; ++column) line.add("");
+      for (int column = 0; column < 13; ++column) line.add("");
       line.add(object.failure);
     }
     text += line.str();

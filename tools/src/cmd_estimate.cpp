@@ -37,7 +37,7 @@ namespace {
 constexpr const char* kEstimatesHeader =
     "split,scene_id,im_id,gt_id,obj_id,label,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,"
     "confident,err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,confident_radius,"
-    "ess_min,time_ms";
+    "ess_min,seen_through,belief_shift,consistent,time_ms";
 constexpr const char* kBopHeader = "scene_id,im_id,obj_id,score,R,t,time";
 
 struct EstimateArguments {
@@ -95,8 +95,8 @@ class EstimateWorker {
       // The 95%-ellipsoid decision, with --confidence-radius-cm only.
       std::optional<bool> confident_radius;
       if (ok && arguments_.estimate.confidence_radius_cm) {
-        confident_radius = report::confident_within_radius(
-            1e4 * object.variance.maxCoeff(), *arguments_.estimate.confidence_radius_cm);
+        confident_radius =
+            confident_at_radius(object, *arguments_.estimate.confidence_radius_cm);
       }
       CsvRow row;
       row.add(key.split).add(key.scene_id).add(key.im_id).add(object.gt_id).add(object.obj_id);
@@ -113,8 +113,15 @@ class EstimateWorker {
         row.add(format_general(report::radius95_cm(1e4 * object.variance.maxCoeff()), 6));
         row.add(!confident_radius ? "" : *confident_radius ? "1" : "0");
         row.add(object.effective_sample_size, 2);
+        if (object.seen_through) {
+          row.add(*object.seen_through, 4);
+        } else {
+          row.add("");
+        }
+        row.add(object.belief_shift ? format_general(*object.belief_shift, 6) : "");
+        row.add(object.consistent ? "1" : "0");
       } else {
-        for (int column = 0; column < 16; ++column) row.add("");  // x_mm .. ess_min
+        for (int column = 0; column < 19; ++column) row.add("");  // x_mm .. consistent
       }
       if (arguments_.no_time) {
         row.add("");
@@ -377,6 +384,13 @@ void run_estimate(const EstimateArguments& arguments, int* exit_code) {
   job.fingerprint["belief_proposal"] = e.adaptive_belief_proposal ? "adaptive" : "product";
   job.fingerprint["min_ess_fraction"] = e.min_effective_sample_fraction;
   job.fingerprint["correlated_pixels"] = e.correlated_pixels;
+  // Always recorded (resolved): estimates of earlier versions assumed none.
+  const ModelMisfit misfit = resolve_model_misfit(e, dataset);
+  job.fingerprint["model_misfit_mm"] = 1e3 * misfit.translation_m;
+  job.fingerprint["model_misfit_deg"] = misfit.rotation_deg;
+  job.fingerprint["model_misfit_source"] = misfit.source;
+  job.fingerprint["max_seen_through"] = e.max_seen_through;
+  job.fingerprint["max_belief_shift"] = e.max_belief_shift;
   // Defaults add nothing, so that folders of earlier runs keep resuming.
   const datasets::DetectorOptions default_detector;
   if (!e.detector.amodal_boxes) job.fingerprint["amodal_boxes"] = false;
@@ -439,6 +453,28 @@ void add_estimator_options(CLI::App& command, EstimateOptions& e) {
   command.add_option_function<double>(
       "--bandwidth-floor-mm", [&e](double mm) { e.min_bandwidth_m = 1e-3 * mm; },
       "floor of the kernel standard deviation of messages and beliefs (mm, default 5)");
+  command
+      .add_option("--max-seen-through", e.max_seen_through,
+                  "consistency check: an ICP-refined estimate is confident only if the sensor sees "
+                  "more than 1 cm past its surface on at most this share of its pixels in the "
+                  "detection box (0-1; 1 = off)")
+      ->capture_default_str();
+  command
+      .add_option("--max-belief-shift", e.max_belief_shift,
+                  "consistency check: ... and only if ICP moved it at most this far from its "
+                  "belief (squared Mahalanobis distance under both covariances; default the "
+                  "chi-square 3-dof 99.9% quantile)")
+      ->capture_default_str();
+  command.add_option_function<double>(
+      "--model-misfit-mm", [&e](double mm) { e.misfit_translation_m = 1e-3 * mm; },
+      "calibrated covariance: per-axis sigma of the offset between the model and the object its "
+      "depth shows (scan and GT pose error; mm, >= 0), added to every estimate's covariance. "
+      "Default: the sensor's with --observation synthetic, else the dataset's sensor.json "
+      "(generated datasets), else 3 mm (real data)");
+  command.add_option_function<double>(
+      "--model-misfit-deg", [&e](double deg) { e.misfit_rotation_deg = deg; },
+      "the same for the model's rotation (per-axis sigma, degrees, >= 0; default as "
+      "--model-misfit-mm, 0.25 on real data)");
   command
       .add_option("--correlated-pixels", e.correlated_pixels,
                   "calibrated covariance: the ICP fit's depth noise counts as independent once "

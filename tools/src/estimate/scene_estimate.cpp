@@ -12,6 +12,7 @@
 #include <clutterscope/render/model_cache.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <clutterscope/tools/batch.hpp>
+#include <clutterscope/tools/report/calibration.hpp>
 #include <clutterscope/visibility/image_visibility.hpp>
 #include <cmath>
 #include <cstdio>
@@ -22,6 +23,8 @@
 #include <stdexcept>
 
 namespace clutterscope::tools {
+
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -287,6 +290,16 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (!(correlated_pixels >= 1) || !std::isfinite(correlated_pixels))
     return fail("--correlated-pixels must be a finite number >= 1");
   if (!(min_residual_m > 0)) return fail("the residual floor must be > 0");
+  if (!(free_space_tolerance_m >= 0) || !std::isfinite(free_space_tolerance_m))
+    return fail("free-space tolerance must be a finite number >= 0");
+  if (!(max_seen_through >= 0 && max_seen_through <= 1))
+    return fail("--max-seen-through must be in [0, 1]");
+  if (!(max_belief_shift > 0)) return fail("--max-belief-shift must be > 0");
+  if (misfit_translation_m &&
+      (!(*misfit_translation_m >= 0) || !std::isfinite(*misfit_translation_m)))
+    return fail("--model-misfit-mm must be a finite number >= 0");
+  if (misfit_rotation_deg && (!(*misfit_rotation_deg >= 0) || !std::isfinite(*misfit_rotation_deg)))
+    return fail("--model-misfit-deg must be a finite number >= 0");
   if (!(support_z_sigma_m > 0) || !(non_contact_floor > 0) || !(min_bandwidth_m > 0))
     return fail("support sigma, non-contact floor and bandwidth floor must be > 0");
   if (!detector.IsValid(why)) return false;
@@ -299,10 +312,48 @@ bool EstimateOptions::IsValid(std::string* why) const {
   return depth.IsValid(why);
 }
 
+// The free-space share of the full model of obj_id at (rotation, translation) over the detection
+// box of `observation`, every pixel of the box (ObjectEstimate::seen_through).
+double free_space_share(SceneEstimator::State& s, int obj_id, const Eigen::Matrix3d& rotation,
+                        const Eigen::Vector3d& translation,
+                        const estimator::BoxObservation& observation);
+
+bool confident_at_radius(const ObjectEstimate& object, double radius_cm) {
+  return report::confident_within_radius(1e4 * object.variance.maxCoeff(), radius_cm) &&
+         object.consistent;
+}
+
+ModelMisfit resolve_model_misfit(const EstimateOptions& options,
+                                 const datasets::BopDataset& dataset) {
+  ModelMisfit misfit;
+  const fs::path sensor_json = dataset.root() / "sensor.json";
+  if (options.observation == Observation::kSynthetic) {
+    misfit.translation_m = options.sensor.misfit_translation_sigma_m;
+    misfit.rotation_deg = options.sensor.misfit_rotation_sigma_deg;
+    misfit.source = "sensor preset " + options.sensor.preset + " (--observation synthetic)";
+  } else if (fs::exists(sensor_json)) {
+    const datasets::DeclaredMisfit declared = datasets::read_sensor_misfit(sensor_json);
+    misfit.translation_m = declared.translation_sigma_m;
+    misfit.rotation_deg = declared.rotation_sigma_deg;
+    misfit.source = "sensor.json";
+  } else {
+    misfit.translation_m = kMeasuredMisfitTranslationM;
+    misfit.rotation_deg = kMeasuredMisfitRotationDeg;
+    misfit.source = "default for measured depth without sensor.json";
+  }
+  if (options.misfit_translation_m || options.misfit_rotation_deg) {
+    if (options.misfit_translation_m) misfit.translation_m = *options.misfit_translation_m;
+    if (options.misfit_rotation_deg) misfit.rotation_deg = *options.misfit_rotation_deg;
+    misfit.source = "--model-misfit-mm/--model-misfit-deg";
+  }
+  return misfit;
+}
+
 struct SceneEstimator::State {
   State(const datasets::BopDataset& data, const EstimateOptions& opts)
       : dataset(data),
         options(opts),
+        misfit(resolve_model_misfit(opts, data)),
         context(render::EglContext::create()),
         renderer(context),
         models(data, opts.model_cache()),
@@ -320,12 +371,34 @@ struct SceneEstimator::State {
 
   const datasets::BopDataset& dataset;
   EstimateOptions options;
+  ModelMisfit misfit;
   render::EglContext context;
   render::Renderer renderer;
   render::ModelCache models;
   std::shared_ptr<RenderHypothesisScorer> scorer;
   std::map<int, Eigen::Matrix3Xd> points;
 };
+
+double free_space_share(SceneEstimator::State& s, int obj_id, const Eigen::Matrix3d& rotation,
+                        const Eigen::Vector3d& translation,
+                        const estimator::BoxObservation& observation) {
+  estimator::BoxObservation box = observation;
+  box.stride = 1;
+  render::TileRequest request;
+  request.intrinsics = scoring_grid_intrinsics(box);
+  request.instance.mesh = &s.models.mesh(obj_id);
+  request.instance.model_to_camera.linear() = rotation;
+  request.instance.model_to_camera.translation() = translation;
+  // Full models need not be closed or outward-wound: no culling.
+  const render::TileAtlas atlas = s.renderer.render_tiles({request}, render::TileOptions{false, false});
+  const cv::Mat depth = atlas.depth(0);
+  std::vector<float> synthetic(static_cast<std::size_t>(box.width) * box.height);
+  for (int r = 0; r < box.height; ++r)
+    for (int c = 0; c < box.width; ++c)
+      synthetic[static_cast<std::size_t>(r) * box.width + c] = depth.at<float>(r, c);
+  return estimator::count_free_space_violations(box, synthetic, s.options.free_space_tolerance_m)
+      .share();
+}
 
 SceneEstimator::SceneEstimator(const datasets::BopDataset& dataset,
                                const EstimateOptions& options) {
@@ -720,17 +793,35 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
       spread.variances = Eigen::Vector3d::Constant(options.proposal_min_bandwidth_m *
                                                    options.proposal_min_bandwidth_m);
       mean = fused.mean;
-      variance = estimator::fused_covariance(fused.covariance, information,
-                                             estimator::mixture_covariance(spread))
-                     .diagonal();
+      const Eigen::Matrix3d belief_covariance = estimator::mixture_covariance(spread);
+      variance =
+          estimator::fused_covariance(fused.covariance, information, belief_covariance).diagonal();
+      // How far the refinement moved the estimate out of its belief: the squared Mahalanobis
+      // distance of the refined mean from the belief's, under both covariances.
+      const Eigen::Vector3d shift = mean - estimator::mixture_mean(belief);
+      const Eigen::Matrix3d both = belief_covariance + Eigen::Matrix3d(variance.asDiagonal());
+      object.belief_shift = shift.dot(both.ldlt().solve(shift));
     }
+    // Isotropic, so the same in the support frame.
+    variance += estimator::model_misfit_covariance(
+                    s.misfit.translation_m, s.misfit.rotation_deg * EIGEN_PI / 180.0,
+                    0.5 * s.dataset.model(object.obj_id).diameter)
+                    .diagonal();
     object.position = support_to_camera * mean;
     object.variance = variance;
-    object.confident = (variance.array() <= threshold_m2).all();
+    object.model_translation = object.position - object.rotation * object.model_centre;
+    if (!object.amodal) {
+      object.seen_through =
+          free_space_share(s, object.obj_id, object.rotation, object.model_translation,
+                           *object.observation);
+    }
+    object.consistent =
+        (!object.seen_through || *object.seen_through <= options.max_seen_through) &&
+        (!object.belief_shift || *object.belief_shift <= options.max_belief_shift);
+    object.confident = (variance.array() <= threshold_m2).all() && object.consistent;
     object.error_m = (object.position - truth).norm();
     object.error_support_m = mean - position[object.gt_id];
     object.nees = (object.error_support_m->array().square() / variance.array()).sum();
-    object.model_translation = object.position - object.rotation * object.model_centre;
     if (options.keep_history) {
       for (const auto& iteration : nbp.history) {
         const estimator::GaussianMixture& mixture = iteration[static_cast<std::size_t>(node)];

@@ -143,7 +143,7 @@ NamedPlot belief_plot(const BeliefImage& figure, double variance_threshold_cm2) 
       const PoseEstimate& estimate = *object.estimate;
       projected.estimate =
           pixel(1e-3 * Eigen::Vector3d(estimate.x_mm, estimate.y_mm, estimate.z_mm));
-      projected.estimate_confident = estimate.max_variance_cm2() <= variance_threshold_cm2;
+      projected.estimate_confident = estimate.confident_at(variance_threshold_cm2);
       confident += projected.estimate_confident;
     }
     final_panel.objects.push_back(std::move(projected));

@@ -142,11 +142,11 @@ CalibrationAnalysis analyse_calibration(const std::vector<ObjectRow>& objects,
     if (!estimate.err_cm) continue;
     calibration.has_nees |= estimate.err_x_cm.has_value();
     all.push_back(estimate.nees);
-    if (estimate.max_variance_cm2() <= options.variance_threshold_cm2) {
+    if (estimate.confident_at(options.variance_threshold_cm2)) {
       confident.push_back(estimate.nees);
     }
     if (options.confidence_radius_cm &&
-        confident_within_radius(estimate.max_variance_cm2(), *options.confidence_radius_cm)) {
+        estimate.confident_within(*options.confidence_radius_cm)) {
       confident_radius.push_back(estimate.nees);
     }
   }
@@ -213,7 +213,7 @@ ReportAnalysis analyse_report(const std::vector<ObjectRow>& objects,
       continue;
     }
     ++counts.estimated;
-    const bool confident = object.estimate->max_variance_cm2() <= options.variance_threshold_cm2;
+    const bool confident = object.estimate->confident_at(options.variance_threshold_cm2);
     counts.confident += confident;
     if (!object.estimate->err_cm) continue;
     ++counts.with_error;
@@ -260,7 +260,7 @@ ReportAnalysis analyse_report(const std::vector<ObjectRow>& objects,
       if (!row->estimate) continue;
       ++image.n_estimated;
       variances.push_back(row->estimate->max_variance_cm2());
-      image.n_confident += row->estimate->max_variance_cm2() <= options.variance_threshold_cm2;
+      image.n_confident += row->estimate->confident_at(options.variance_threshold_cm2);
     }
     const auto given = scene_visibility.find(key);
     // Eq. 10's V^s; an image whose objects have no pixel in view has V^s = 0.

@@ -248,7 +248,7 @@ std::vector<VisibilityBand> visibility_bands(const std::vector<ObjectRow>& objec
     ++band.estimated;
     variances[b].push_back(estimate.max_variance_cm2());
     if (estimate.err_cm) errors[b].push_back(*estimate.err_cm);
-    if (estimate.max_variance_cm2() > variance_threshold_cm2) continue;
+    if (!estimate.confident_at(variance_threshold_cm2)) continue;
     ++band.confident;
     if (!estimate.err_cm) continue;
     ++band.confident_with_error;

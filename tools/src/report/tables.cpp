@@ -52,6 +52,7 @@ std::optional<PoseEstimate> parse_estimate(const CsvTable& table, const CsvRecor
   }
   if (table.has_column("ess_min")) estimate.ess_min = table.optional_number(record, "ess_min");
   if (table.has_column("time_ms")) estimate.time_ms = table.optional_number(record, "time_ms");
+  if (table.has_column("consistent")) estimate.consistent = table.boolean(record, "consistent");
   return estimate;
 }
 
@@ -61,6 +62,14 @@ using Key = std::tuple<std::string, int, int, int>;
 
 double PoseEstimate::max_variance_cm2() const {
   return std::max(var_x_cm2, std::max(var_y_cm2, var_z_cm2));
+}
+
+bool PoseEstimate::confident_at(double threshold_cm2) const {
+  return max_variance_cm2() <= threshold_cm2 && consistent;
+}
+
+bool PoseEstimate::confident_within(double radius_cm) const {
+  return confident_within_radius(max_variance_cm2(), radius_cm) && consistent;
 }
 
 double PoseEstimate::radius95_cm() const { return report::radius95_cm(max_variance_cm2()); }
@@ -190,7 +199,7 @@ std::string format_objects_csv(const std::vector<ObjectRow>& objects) {
   }
   out << ",x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,max_var_cm2,confident,err_cm,"
          "init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,confident_radius,ess_min,time_"
-         "ms\n";
+         "ms,consistent\n";
   const auto optional = [](const std::optional<double>& value) {
     return value ? format_number(*value) : std::string();
   };
@@ -210,9 +219,9 @@ std::string format_objects_csv(const std::vector<ObjectRow>& objects) {
           << ',' << optional(e.err_y_cm) << ',' << optional(e.err_z_cm) << ',' << optional(e.nees)
           << ',' << format_number(e.radius95_cm()) << ','
           << (e.confident_radius ? (*e.confident_radius ? "1" : "0") : "") << ','
-          << optional(e.ess_min) << ',' << optional(e.time_ms);
+          << optional(e.ess_min) << ',' << optional(e.time_ms) << ',' << (e.consistent ? 1 : 0);
     } else {
-      out << ",,,,,,,,,,,,,,,,,,";
+      out << ",,,,,,,,,,,,,,,,,,,";
     }
     out << '\n';
   }

@@ -156,7 +156,7 @@ ThresholdRow evaluate_threshold(const std::vector<ObjectRow>& objects, double th
                                 double accurate_cm, double visibility_cutoff) {
   return evaluate_decision(objects, threshold_cm2, accurate_cm, visibility_cutoff,
                            [threshold_cm2](const PoseEstimate& estimate) {
-                             return estimate.max_variance_cm2() <= threshold_cm2;
+                             return estimate.confident_at(threshold_cm2);
                            });
 }
 
@@ -167,7 +167,7 @@ RadiusRow evaluate_radius(const std::vector<ObjectRow>& objects, double radius_c
   row.row =
       evaluate_decision(objects, radius_cm * radius_cm / kChiSquare3Quantile95, accurate_cm,
                         visibility_cutoff, [radius_cm](const PoseEstimate& estimate) {
-                          return confident_within_radius(estimate.max_variance_cm2(), radius_cm);
+                          return estimate.confident_within(radius_cm);
                         });
   return row;
 }
@@ -203,7 +203,7 @@ std::vector<CutoffRow> accepted_by_cutoff(const std::vector<ObjectRow>& objects,
     for (const ObjectRow& object : objects) {
       if (!object.estimate || object.visib_fract >= row.visibility_cutoff) continue;
       ++row.objects_below;
-      if (object.estimate->max_variance_cm2() > threshold_cm2) continue;
+      if (!object.estimate->confident_at(threshold_cm2)) continue;
       ++row.accepted_below;
       const auto& error = object.estimate->err_cm;
       row.accepted_below_inaccurate += error && *error > accurate_cm;

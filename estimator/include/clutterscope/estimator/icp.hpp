@@ -95,4 +95,14 @@ Eigen::Matrix3d fused_covariance(const Eigen::Matrix3d& fit_spread,
                                  const Eigen::Matrix3d& fit_information,
                                  const Eigen::Matrix3d& belief_covariance);
 
+// The covariance a rigid model misfit adds to a position estimate, which no number of pixels
+// averages out: the model's surface offset from the object's (scan error, GT pose error) with
+// per-axis sigma translation_sigma_m, and rotated about the model origin with per-axis sigma
+// rotation_sigma_rad, which moves a surface point p by theta x p: per-axis variance
+// (2/3) sigma^2 |p|^2 for p in any direction, at |p| = radius_m. Isotropic:
+// (translation_sigma^2 + (2/3) rotation_sigma^2 radius^2) I. Throws std::invalid_argument for a
+// negative or non-finite argument.
+Eigen::Matrix3d model_misfit_covariance(double translation_sigma_m, double rotation_sigma_rad,
+                                        double radius_m);
+
 }  // namespace clutterscope::estimator

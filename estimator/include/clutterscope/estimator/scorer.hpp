@@ -58,6 +58,21 @@ class HypothesisScorer {
 double pixel_cost(const BoxObservation& observation, const std::vector<float>& synthetic_depth,
                   double truncation);
 
+// The free-space test of a pose: over the scoring-grid pixels where both the observation and
+// the synthetic depth have a surface, how many see farther than the synthetic surface by more
+// than `tolerance` (metres of camera Z): rays the hypothesised object would block. An estimate
+// in front of what the camera sees (lifted off its support, slid onto a neighbour's place)
+// shows them on much of its silhouette; a right one only where the sensor errs (flying pixels,
+// edges, misfit).
+struct FreeSpaceCount {
+  int overlap = 0;       // grid pixels with observed and synthetic depth
+  int seen_through = 0;  // of those, observed farther than synthetic + tolerance
+  double share() const { return overlap > 0 ? static_cast<double>(seen_through) / overlap : 0.0; }
+};
+FreeSpaceCount count_free_space_violations(const BoxObservation& observation,
+                                           const std::vector<float>& synthetic_depth,
+                                           double tolerance);
+
 // CPU reference scorer: splats model surface points (model frame, metres) into a z-buffer on
 // the box's scoring grid; the points must be dense enough to cover each grid pixel the model
 // covers (e.g. >= 4 points per grid pixel of the model's silhouette). For tests and small

@@ -32,9 +32,15 @@ struct PoseEstimate {
   std::optional<bool> confident_radius;  // as written by the estimator with --confidence-radius-cm
   std::optional<double> ess_min;
   std::optional<double> time_ms;
+  // Passed the estimator's consistency checks (column `consistent`; earlier versions: true).
+  bool consistent = true;
 
   // The variance the threshold is applied to: max over axes, so "max ≤ T" means every axis ≤ T.
   double max_variance_cm2() const;
+  // The decisions at other thresholds, as the estimator makes them: max_variance_cm2() <=
+  // threshold_cm2 (the 95% ellipsoid within radius_cm), and consistent.
+  bool confident_at(double threshold_cm2) const;
+  bool confident_within(double radius_cm) const;
   // Largest semi-axis of the 95% ellipsoid: sqrt(chi2_3(0.95) * max_variance_cm2()) (cm).
   double radius95_cm() const;
 };
@@ -96,7 +102,7 @@ void join_estimates(std::vector<ObjectRow>& objects, const std::vector<EstimateR
 
 // The joined table as CSV: the visibility columns, then x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,
 // var_z_cm2,max_var_cm2,confident,err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,
-// radius95_cm,confident_radius,ess_min,time_ms (empty when absent).
+// radius95_cm,confident_radius,ess_min,time_ms,consistent (empty when absent).
 // Numbers use the shortest round-trip form, so reading and writing again gives equal bytes.
 std::string format_objects_csv(const std::vector<ObjectRow>& objects);
 
