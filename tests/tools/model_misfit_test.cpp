@@ -62,6 +62,13 @@ TEST(ModelMisfit, AMalformedSensorJsonIsRefusedNamingIt) {
     EXPECT_NE(std::string(error.what()).find("sensor.json"), std::string::npos) << error.what();
     EXPECT_NE(std::string(error.what()).find("misfit_translation_sigma_m"), std::string::npos);
   }
+  // Both options given: the file is not read.
+  EstimateOptions options;
+  options.misfit_translation_m = 0.001;
+  options.misfit_rotation_deg = 0.1;
+  const ModelMisfit misfit = resolve_model_misfit(options, dataset);
+  EXPECT_EQ(misfit.translation_m, 0.001);
+  EXPECT_EQ(misfit.rotation_deg, 0.1);
 }
 
 }  // namespace

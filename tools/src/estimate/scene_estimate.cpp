@@ -327,7 +327,9 @@ ModelMisfit resolve_model_misfit(const EstimateOptions& options,
                                  const datasets::BopDataset& dataset) {
   ModelMisfit misfit;
   const fs::path sensor_json = dataset.root() / "sensor.json";
-  if (options.observation == Observation::kSynthetic) {
+  if (options.misfit_translation_m && options.misfit_rotation_deg) {
+    // Both given: nothing else is read (a malformed sensor.json is overridden too).
+  } else if (options.observation == Observation::kSynthetic) {
     misfit.translation_m = options.sensor.misfit_translation_sigma_m;
     misfit.rotation_deg = options.sensor.misfit_rotation_sigma_deg;
     misfit.source = "sensor preset " + options.sensor.preset + " (--observation synthetic)";
