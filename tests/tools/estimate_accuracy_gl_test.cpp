@@ -11,10 +11,14 @@
 #include <sys/wait.h>
 
 #include <clutterscope/render/context.hpp>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "cli_run.hpp"
 #include "tools/fake_batch_support.hpp"
@@ -34,9 +38,8 @@ int run_quiet(const std::string& arguments, std::string* output) {
 // needs objects below 30% visibility; a set without at least 3 of them only reports it when
 // `require_low_visibility` is false.
 void check_acceptance(const fs::path& dataset, const std::string& name,
-                      bool require_low_visibility) {
+                      bool require_low_visibility, const fs::path& out) {
   std::string output;
-  const fs::path out = testing::fresh_dir("estimate_accuracy_out_" + name);
   ASSERT_EQ(run_quiet("estimate " + dataset.string() + " --out " + out.string() +
                           " --jobs 2 --quiet --no-time",
                       &output),
@@ -71,9 +74,57 @@ TEST(EstimateAccuracyGl, TrayScenesMeetTheAcceptanceCriteria) {
                       &output),
             0)
       << output;
-  check_acceptance(generated, "generated-tray-20x6", true);
+  check_acceptance(generated, "generated-tray-20x6", true,
+                   testing::fresh_dir("estimate_accuracy_out_generated"));
   const fs::path tray6 = fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray6";
-  if (fs::exists(tray6 / "models" / "models_info.json")) check_acceptance(tray6, "tray6", false);
+  if (fs::exists(tray6 / "models" / "models_info.json"))
+    check_acceptance(tray6, "tray6", false, testing::fresh_dir("estimate_accuracy_out_tray6"));
+}
+
+// Issue 14: the same criteria on scenes observed through the Xtion preset (quantised disparity,
+// edge losses, flying pixels, misregistration, 2 mm / 0.25 deg of model misfit), and what the
+// consistency checks promise: no confident estimate ends farther from its object than its
+// initial mean by more than its 95% radius. The 95% coverage of n estimates is checked within 3 binomial standard errors
+// of 0.95 (the 306-object figure is in the README).
+TEST(EstimateAccuracyGl, XtionPresetScenesMeetTheCriteriaAndNeverDriftWhileConfident) {
+  std::string why;
+  if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+  for (const std::string preset : {"tray", "pile"}) {
+    std::string output;
+    const fs::path generated = testing::fresh_dir("estimate_accuracy_xtion_" + preset);
+    ASSERT_EQ(run_quiet("generate --out " + generated.string() + " --preset " + preset +
+                            " --scenes 12 --objects 6 --seed 11 --sensor xtion --quiet",
+                        &output),
+              0)
+        << output;
+    const fs::path out = testing::fresh_dir("estimate_accuracy_out_xtion_" + preset);
+    check_acceptance(generated, "xtion-" + preset + "-12x6", false, out);
+    if (::testing::Test::HasFatalFailure()) return;
+    const nlohmann::json summary =
+        nlohmann::json::parse(testing::read_file(out / "summary.json"));
+    EXPECT_EQ(summary.at("options").at("model_misfit_source"), "sensor.json");
+    const nlohmann::json& all = summary.at("calibration").at("all");
+    const double n = all.at("count").get<double>();
+    const double inside95 = all.at("coverage").at(2).at("observed").get<double>();
+    EXPECT_NEAR(inside95, 0.95, 3 * std::sqrt(0.95 * 0.05 / n)) << preset << ", n = " << n;
+    std::ifstream csv(out / "estimates.csv");
+    std::string line;
+    std::getline(csv, line);
+    int confident = 0;
+    while (std::getline(csv, line)) {
+      std::vector<std::string> cells;
+      std::stringstream fields(line);
+      for (std::string cell; std::getline(fields, cell, ',');) cells.push_back(cell);
+      if (cells.size() < 20 || cells[12] != "1") continue;  // confident
+      ++confident;
+      // err_cm <= init_err_cm + radius95_cm: an initial mean already within the model misfit
+      // of the object (0.4 cm) may end a fraction of a millimetre farther, inside the
+      // estimate's own 95% radius; drifting away (the issue's 14 -> 29 cm) is what is refused.
+      EXPECT_LE(std::stod(cells[13]), std::stod(cells[14]) + std::stod(cells[19]))
+          << preset << ": " << line;
+    }
+    EXPECT_GT(confident, 20) << preset;
+  }
 }
 
 }  // namespace
