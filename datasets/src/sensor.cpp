@@ -176,8 +176,9 @@ bool SensorOptions::IsValid(std::string* why) const {
   }
   if (!(window_half_px >= 0) || !std::isfinite(window_half_px) || !(window_sigma_m >= 0) ||
       !std::isfinite(window_sigma_m) || !(window_dropout >= 0 && window_dropout <= 1)) {
-    return fail("sensor matching window: half width and sigma must be finite and >= 0, dropout "
-                "in [0, 1]");
+    return fail(
+        "sensor matching window: half width and sigma must be finite and >= 0, dropout "
+        "in [0, 1]");
   }
   if (!(lateral_sigma_px >= 0) || !(registration_sigma_px >= 0)) {
     return fail("sensor lateral and registration sigmas must be >= 0 px");

@@ -67,8 +67,8 @@ void ResidualStatistics::add(const cv::Mat& measured, const cv::Mat& rendered_m,
       const float d = distance.at<float>(v, u);
       const bool edge = d <= options_.edge_band_px;
       const bool interior = d >= options_.interior_margin_px;
-      const std::size_t bucket =
-          static_cast<std::size_t>(std::min<float>(d, static_cast<float>(options_.interior_margin_px)));
+      const std::size_t bucket = static_cast<std::size_t>(
+          std::min<float>(d, static_cast<float>(options_.interior_margin_px)));
       ++object_px_;
       edge_px_ += edge;
       interior_px_ += interior;
@@ -120,7 +120,8 @@ cv::Mat with_background(const cv::Mat& rendered_m, const cv::Mat& labels,
                         const cv::Mat& background_m) {
   if (rendered_m.type() != CV_32F || background_m.type() != CV_32F || labels.type() != CV_32S ||
       rendered_m.size() != labels.size() || rendered_m.size() != background_m.size()) {
-    throw std::invalid_argument("with_background needs CV_32F depths and CV_32S labels of one size");
+    throw std::invalid_argument(
+        "with_background needs CV_32F depths and CV_32S labels of one size");
   }
   cv::Mat scene = rendered_m.clone();
   background_m.copyTo(scene, labels <= 0);

@@ -34,7 +34,8 @@ DeclaredMisfit parse_sensor_misfit(const std::string& text, const std::filesyste
     throw DatasetError(path, std::string("malformed JSON: ") + error.what());
   }
   const detail::FieldContext context{path, ""};
-  if (!json.is_object()) context.fail(std::string("expected a JSON object, got ") + json.type_name());
+  if (!json.is_object())
+    context.fail(std::string("expected a JSON object, got ") + json.type_name());
   DeclaredMisfit misfit;
   // Bounds far beyond any sensor: a value past them is a unit error (mm written as m).
   misfit.translation_sigma_m = optional_sigma(json, "misfit_translation_sigma_m", 0.1, context);

@@ -43,8 +43,8 @@ TEST(ResidualStatistics, CountsEdgeAndInteriorPixelsOfASquare) {
   const ResidualSummary s = statistics.summary();
   EXPECT_EQ(s.images, 1);
   EXPECT_EQ(s.object_px, 400);
-  EXPECT_EQ(s.edge_px, 400 - 14 * 14);   // rings 0, 1, 2
-  EXPECT_EQ(s.interior_px, 10 * 10);     // rings 5 and in
+  EXPECT_EQ(s.edge_px, 400 - 14 * 14);  // rings 0, 1, 2
+  EXPECT_EQ(s.interior_px, 10 * 10);    // rings 5 and in
   EXPECT_DOUBLE_EQ(s.missing_object, (14 * 14 - 10 * 10) / 400.0);
   EXPECT_DOUBLE_EQ(s.missing_edge, 0.0);
   EXPECT_DOUBLE_EQ(s.missing_interior, 0.0);

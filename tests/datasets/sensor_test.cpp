@@ -1,9 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/generator.hpp>
 #include <clutterscope/datasets/sensor.hpp>
-#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <string>
@@ -348,8 +348,7 @@ TEST(Sensor, MatchingWindowLossAndNoiseTaperFromTheEdge) {
     const double p = options.window_dropout * taper;
     EXPECT_NEAR(lost / 2000.0, p, 5 * std::sqrt(std::max(p * (1 - p), 1e-4) / 2000)) << d;
     const double sigma = options.window_sigma_m * taper;
-    EXPECT_NEAR(std::sqrt(sum_sq / n), sigma, 5 * std::max(sigma, 1e-9) / std::sqrt(2.0 * n))
-        << d;
+    EXPECT_NEAR(std::sqrt(sum_sq / n), sigma, 5 * std::max(sigma, 1e-9) / std::sqrt(2.0 * n)) << d;
   }
   // The far side of the edge alike: column 32 + d.
   int lost_right = 0;
@@ -470,7 +469,8 @@ TEST(Sensor, PresetsAreValidDistinctAndRecorded) {
 // sensor.json as generate writes it declares the misfit; older files (no misfit keys) declare
 // none; malformed ones are refused naming the file and field.
 TEST(Sensor, SensorJsonDeclaresTheModelMisfit) {
-  const DeclaredMisfit xtion = parse_sensor_misfit(to_json(sensor_preset("xtion")).dump(), "s.json");
+  const DeclaredMisfit xtion =
+      parse_sensor_misfit(to_json(sensor_preset("xtion")).dump(), "s.json");
   EXPECT_DOUBLE_EQ(xtion.translation_sigma_m, sensor_preset("xtion").misfit_translation_sigma_m);
   EXPECT_DOUBLE_EQ(xtion.rotation_sigma_deg, sensor_preset("xtion").misfit_rotation_sigma_deg);
   const DeclaredMisfit old = parse_sensor_misfit(R"({"noise_a_m": 0.0012})", "s.json");

@@ -139,7 +139,8 @@ TEST(Icp, ModelMisfitCovarianceIsTheSpreadOfARotatedSurfacePoint) {
     for (int b = a + 1; b < 3; ++b) EXPECT_NEAR(scatter(a, b), 0.0, tolerance);
   }
   // Translation adds its variance; nothing is none.
-  EXPECT_TRUE(model_misfit_covariance(0.002, 0.0, 0.1).isApprox(4e-6 * Eigen::Matrix3d::Identity()));
+  EXPECT_TRUE(
+      model_misfit_covariance(0.002, 0.0, 0.1).isApprox(4e-6 * Eigen::Matrix3d::Identity()));
   EXPECT_TRUE(model_misfit_covariance(0.0, 0.0, 0.1).isZero());
   EXPECT_THROW(model_misfit_covariance(-1e-3, 0.0, 0.1), std::invalid_argument);
   EXPECT_THROW(model_misfit_covariance(0.0, std::nan(""), 0.1), std::invalid_argument);

@@ -126,9 +126,8 @@ TEST_F(BenchCalibrationCliGl, TableAgreesWithTheRowsAndTheRowsWithEstimate) {
   for (std::size_t i = 0; i < rows.rows.size(); ++i) {
     const std::size_t e = estimate_row.at(rows.at(i, "scene_id") + "/" + rows.at(i, "im_id") + "/" +
                                           rows.at(i, "gt_id"));
-    for (const char* column :
-         {"err_cm", "err_x_cm", "var_z_cm2", "nees", "radius95_cm", "confident", "ess_min",
-          "consistent"}) {
+    for (const char* column : {"err_cm", "err_x_cm", "var_z_cm2", "nees", "radius95_cm",
+                               "confident", "ess_min", "consistent"}) {
       EXPECT_EQ(rows.at(i, column), estimates.at(e, column)) << column << " of row " << i;
     }
     EXPECT_EQ(estimates.at(e, "confident_radius"), "");  // estimate ran without a radius

@@ -37,8 +37,8 @@ int run_quiet(const std::string& arguments, std::string* output) {
 // Runs the estimator with the default options and checks the criteria. The variance criterion
 // needs objects below 30% visibility; a set without at least 3 of them only reports it when
 // `require_low_visibility` is false.
-void check_acceptance(const fs::path& dataset, const std::string& name,
-                      bool require_low_visibility, const fs::path& out) {
+void check_acceptance(const fs::path& dataset, const std::string& name, bool require_low_visibility,
+                      const fs::path& out) {
   std::string output;
   ASSERT_EQ(run_quiet("estimate " + dataset.string() + " --out " + out.string() +
                           " --jobs 2 --quiet --no-time",
@@ -84,8 +84,8 @@ TEST(EstimateAccuracyGl, TrayScenesMeetTheAcceptanceCriteria) {
 // Issue 14: the same criteria on scenes observed through the Xtion preset (quantised disparity,
 // edge losses, flying pixels, misregistration, 2 mm / 0.25 deg of model misfit), and what the
 // consistency checks promise: no confident estimate ends farther from its object than its
-// initial mean by more than its 95% radius. The 95% coverage of n estimates is checked within 3 binomial standard errors
-// of 0.95 (the 306-object figure is in the README).
+// initial mean by more than its 95% radius. The 95% coverage of n estimates is checked within 3
+// binomial standard errors of 0.95 (the 306-object figure is in the README).
 TEST(EstimateAccuracyGl, XtionPresetScenesMeetTheCriteriaAndNeverDriftWhileConfident) {
   std::string why;
   if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
@@ -100,8 +100,7 @@ TEST(EstimateAccuracyGl, XtionPresetScenesMeetTheCriteriaAndNeverDriftWhileConfi
     const fs::path out = testing::fresh_dir("estimate_accuracy_out_xtion_" + preset);
     check_acceptance(generated, "xtion-" + preset + "-12x6", false, out);
     if (::testing::Test::HasFatalFailure()) return;
-    const nlohmann::json summary =
-        nlohmann::json::parse(testing::read_file(out / "summary.json"));
+    const nlohmann::json summary = nlohmann::json::parse(testing::read_file(out / "summary.json"));
     EXPECT_EQ(summary.at("options").at("model_misfit_source"), "sensor.json");
     const nlohmann::json& all = summary.at("calibration").at("all");
     const double n = all.at("count").get<double>();

@@ -220,8 +220,8 @@ TEST_F(EstimateGl, JobsOneAndTwoGiveByteIdenticalOutputs) {
 TEST_F(EstimateGl, ConsistencyChecksGateTheConfidentDecision) {
   const auto run_with = [&](const std::string& name, const std::string& extra) {
     const fs::path out = fresh_dir(name);
-    const CommandRun run = run_merged("estimate " + dataset_->string() + " --out " +
-                                      out.string() + " --no-time" + kFast + extra);
+    const CommandRun run = run_merged("estimate " + dataset_->string() + " --out " + out.string() +
+                                      " --no-time" + kFast + extra);
     EXPECT_EQ(run.exit_code, 0) << run.output;
     return read_csv(out / "estimates.csv");
   };

@@ -49,7 +49,8 @@ TEST_F(SensorFitCli, RecoversTheSensorAGeneratedDatasetWasMadeWith) {
   EXPECT_EQ(fit["measured"]["images"], 6);
   EXPECT_EQ(fit["rows"].size(), 6u);
   EXPECT_TRUE(fit["all_agree"].get<bool>());
-  const auto other = run_merged("sensor-fit " + quoted(kSamples / "tray6") + " --sensor xtion --quiet");
+  const auto other =
+      run_merged("sensor-fit " + quoted(kSamples / "tray6") + " --sensor xtion --quiet");
   EXPECT_EQ(other.exit_code, 1) << other.output;
   EXPECT_NE(other.output.find("outside tolerance"), std::string::npos) << other.output;
 }

@@ -183,8 +183,7 @@ void print_line(const std::string& label, const std::vector<const CalibrationRow
       confident_errors.push_back(100 * *object.error_m);
       confident_over_2cm += 100 * *object.error_m > 2.0;
     }
-    if (radius_cm)
-      confident_radius += confident_at_radius(object, *radius_cm);
+    if (radius_cm) confident_radius += confident_at_radius(object, *radius_cm);
   }
   const report::Coverage coverage = report::coverage(nees);
   const report::EssQuantiles quantiles = report::ess_quantiles(ess);

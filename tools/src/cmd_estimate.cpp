@@ -95,8 +95,7 @@ class EstimateWorker {
       // The 95%-ellipsoid decision, with --confidence-radius-cm only.
       std::optional<bool> confident_radius;
       if (ok && arguments_.estimate.confidence_radius_cm) {
-        confident_radius =
-            confident_at_radius(object, *arguments_.estimate.confidence_radius_cm);
+        confident_radius = confident_at_radius(object, *arguments_.estimate.confidence_radius_cm);
       }
       CsvRow row;
       row.add(key.split).add(key.scene_id).add(key.im_id).add(object.gt_id).add(object.obj_id);

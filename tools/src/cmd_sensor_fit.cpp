@@ -87,8 +87,7 @@ int run_sensor_fit(const SensorFitArguments& arguments) {
   if (!(arguments.tolerance > 0)) throw UsageError("--tolerance must be > 0");
   const datasets::SensorOptions sensor = arguments.sensor.resolve();
   const datasets::BopDataset dataset = open_dataset(arguments.dataset);
-  const std::vector<datasets::ImageKey> keys =
-      dataset.list_images(selection_of(arguments.dataset));
+  const std::vector<datasets::ImageKey> keys = dataset.list_images(selection_of(arguments.dataset));
   if (keys.empty()) throw UsageError("no images selected in " + arguments.dataset.dataset);
 
   const render::EglContext context = render::EglContext::create();
@@ -116,11 +115,13 @@ int run_sensor_fit(const SensorFitArguments& arguments) {
 
     // The preset sees the scene as rendered from its perturbed models (model misfit), over the
     // measured background.
-    std::mt19937_64 rng = datasets::derive_rng(arguments.seed, static_cast<std::uint64_t>(key.scene_id),
-                                               static_cast<std::uint64_t>(key.im_id));
+    std::mt19937_64 rng =
+        datasets::derive_rng(arguments.seed, static_cast<std::uint64_t>(key.scene_id),
+                             static_cast<std::uint64_t>(key.im_id));
     std::vector<render::Instance> observed = instances;
     for (render::Instance& instance : observed) {
-      instance.model_to_camera = instance.model_to_camera * datasets::draw_model_misfit(sensor, rng);
+      instance.model_to_camera =
+          instance.model_to_camera * datasets::draw_model_misfit(sensor, rng);
     }
     const render::DepthLabelImage seen = renderer.render(intrinsics, observed);
     const cv::Mat clean = datasets::with_background(seen.depth, seen.labels, depth);
@@ -156,7 +157,8 @@ int run_sensor_fit(const SensorFitArguments& arguments) {
   }
   std::printf("by distance to the nearest depth edge (px):");
   for (std::size_t d = 0; d < m.missing_by_distance.size(); ++d)
-    std::printf(" %6s", (std::to_string(d) + (d + 1 == m.missing_by_distance.size() ? "+" : "")).c_str());
+    std::printf(" %6s",
+                (std::to_string(d) + (d + 1 == m.missing_by_distance.size() ? "+" : "")).c_str());
   const auto profile = [](const char* name, const std::vector<double>& values, double scale) {
     std::printf("\n  %-39s", name);
     for (const double value : values) std::printf(" %6.2f", value * scale);
@@ -164,7 +166,8 @@ int run_sensor_fit(const SensorFitArguments& arguments) {
   profile("missing, measured (%)", m.missing_by_distance, 1e2);
   profile(("missing, " + sensor.preset + " (%)").c_str(), s.missing_by_distance, 1e2);
   profile("median |residual|, measured (mm)", m.median_abs_by_distance_m, 1e3);
-  profile(("median |residual|, " + sensor.preset + " (mm)").c_str(), s.median_abs_by_distance_m, 1e3);
+  profile(("median |residual|, " + sensor.preset + " (mm)").c_str(), s.median_abs_by_distance_m,
+          1e3);
   std::printf("\n");
   std::printf("outliers (|residual| > %.0f mm) among returns: measured %.1f%%, %s %.1f%%\n",
               arguments.statistics.outlier_residual_m * 1e3, 100 * m.outlier_object,

@@ -392,7 +392,8 @@ double free_space_share(SceneEstimator::State& s, int obj_id, const Eigen::Matri
   request.instance.model_to_camera.linear() = rotation;
   request.instance.model_to_camera.translation() = translation;
   // Full models need not be closed or outward-wound: no culling.
-  const render::TileAtlas atlas = s.renderer.render_tiles({request}, render::TileOptions{false, false});
+  const render::TileAtlas atlas =
+      s.renderer.render_tiles({request}, render::TileOptions{false, false});
   const cv::Mat depth = atlas.depth(0);
   std::vector<float> synthetic(static_cast<std::size_t>(box.width) * box.height);
   for (int r = 0; r < box.height; ++r)
@@ -805,17 +806,16 @@ ViewEstimate SceneEstimator::estimate(const datasets::SceneView& view) {
       object.belief_shift = shift.dot(both.ldlt().solve(shift));
     }
     // Isotropic, so the same in the support frame.
-    variance += estimator::model_misfit_covariance(
-                    s.misfit.translation_m, s.misfit.rotation_deg * EIGEN_PI / 180.0,
-                    0.5 * s.dataset.model(object.obj_id).diameter)
+    variance += estimator::model_misfit_covariance(s.misfit.translation_m,
+                                                   s.misfit.rotation_deg * EIGEN_PI / 180.0,
+                                                   0.5 * s.dataset.model(object.obj_id).diameter)
                     .diagonal();
     object.position = support_to_camera * mean;
     object.variance = variance;
     object.model_translation = object.position - object.rotation * object.model_centre;
     if (!object.amodal) {
-      object.seen_through =
-          free_space_share(s, object.obj_id, object.rotation, object.model_translation,
-                           *object.observation);
+      object.seen_through = free_space_share(s, object.obj_id, object.rotation,
+                                             object.model_translation, *object.observation);
     }
     object.consistent =
         (!object.seen_through || *object.seen_through <= options.max_seen_through) &&

@@ -145,8 +145,7 @@ CalibrationAnalysis analyse_calibration(const std::vector<ObjectRow>& objects,
     if (estimate.confident_at(options.variance_threshold_cm2)) {
       confident.push_back(estimate.nees);
     }
-    if (options.confidence_radius_cm &&
-        estimate.confident_within(*options.confidence_radius_cm)) {
+    if (options.confidence_radius_cm && estimate.confident_within(*options.confidence_radius_cm)) {
       confident_radius.push_back(estimate.nees);
     }
   }

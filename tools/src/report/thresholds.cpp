@@ -164,11 +164,9 @@ RadiusRow evaluate_radius(const std::vector<ObjectRow>& objects, double radius_c
                           double accurate_cm, double visibility_cutoff) {
   RadiusRow row;
   row.radius_cm = radius_cm;
-  row.row =
-      evaluate_decision(objects, radius_cm * radius_cm / kChiSquare3Quantile95, accurate_cm,
-                        visibility_cutoff, [radius_cm](const PoseEstimate& estimate) {
-                          return estimate.confident_within(radius_cm);
-                        });
+  row.row = evaluate_decision(
+      objects, radius_cm * radius_cm / kChiSquare3Quantile95, accurate_cm, visibility_cutoff,
+      [radius_cm](const PoseEstimate& estimate) { return estimate.confident_within(radius_cm); });
   return row;
 }
 
