@@ -36,7 +36,8 @@
 #               (2 scenes, seed 5); pile (2 scenes, seed 6, d435, duplicates and false positives)
 #
 # The manifest: "SHA256  PATH" per file under SCRATCH/out (PATH relative to SCRATCH), sorted;
-# lines starting with # are comments. Before hashing, a python3 filter (below) makes the
+# lines starting with # are comments. It also lists the inputs, SCRATCH/in (the copied samples),
+# so a check against a manifest recorded on other samples reports them as differing inputs. Before hashing, a python3 filter (below) makes the
 # following reproducible; nothing else is touched:
 #   - excluded: */.batch/file_digests.tsv, the resume cache of input-file hashes: it holds the
 #     inputs' modification times (ns) and absolute paths, and leaves out files modified less than
@@ -157,8 +158,8 @@ def drop_times(value):
 
 print("# clutterscope compare-outputs manifest: SHA256  PATH (relative to the scratch folder)")
 lines = []
-for folder, dirs, files in os.walk(os.path.join(scratch, "out")):
-    dirs.sort()
+walk = [w for top in ("in", "out") for w in os.walk(os.path.join(scratch, top))]
+for folder, dirs, files in walk:
     for name in files:
         path = os.path.join(folder, name)
         rel = os.path.relpath(path, scratch)
