@@ -3,10 +3,11 @@
 # a restructuring that must change no behaviour).
 #
 # Usage:
-#   scripts/compare-outputs.sh record MANIFEST [BINARY]   run everything, write MANIFEST
-#   scripts/compare-outputs.sh check  MANIFEST [BINARY]   run everything again, compare with MANIFEST:
-#                                                         exit 0 identical, 1 with the list of
-#                                                         differing files, 2 usage or run error
+#   scripts/compare-outputs.sh record MANIFEST [BINARY]  run everything, write MANIFEST
+#   scripts/compare-outputs.sh check  MANIFEST [BINARY]  run everything again, compare with
+#                                                        MANIFEST: exit 0 identical, 1 with the
+#                                                        list of differing files, 2 usage or
+#                                                        run error
 #   BINARY defaults to build/clutterscope of this checkout (a relative BINARY is taken from the
 #   current directory).
 #
@@ -20,7 +21,7 @@
 #
 # What runs (into SCRATCH/out/NAME; every run with its default --jobs 2 given explicitly, -q /
 # --quiet, stdout kept as SCRATCH/out/stdout/NAME.txt; a run that exits non-zero stops the script
-# with exit 2). All with the commands' default estimator settings (one pass takes about 1 minute
+# with exit 2). All with the commands' default estimator settings (one pass takes about 40 s
 # on 2 shared cores, so no option is reduced):
 #   report      tray6 --overlays --no-time (scripts/quickstart.sh's report, made byte-reproducible
 #               by --no-time); ycbv_real --no-time
@@ -35,10 +36,11 @@
 #   generate    the two commands that made tray6 and tray10 (datasets/samples/README.md); shelf
 #               (2 scenes, seed 5); pile (2 scenes, seed 6, d435, duplicates and false positives)
 #
-# The manifest: "SHA256  PATH" per file under SCRATCH/out (PATH relative to SCRATCH), sorted;
-# lines starting with # are comments. It also lists the inputs, SCRATCH/in (the copied samples),
-# so a check against a manifest recorded on other samples reports them as differing inputs. Before hashing, a python3 filter (below) makes the
-# following reproducible; nothing else is touched:
+# The manifest: "SHA256  PATH" per file, PATH relative to SCRATCH, sorted by PATH; lines starting
+# with # are comments. It lists the outputs (SCRATCH/out) and the inputs (SCRATCH/in, the copied
+# samples: a check against a manifest recorded on other samples shows them as differing inputs).
+# Before hashing, a python3 filter (write_manifest below) makes the following reproducible;
+# nothing else is touched:
 #   - excluded: */.batch/file_digests.tsv, the resume cache of input-file hashes: it holds the
 #     inputs' modification times (ns) and absolute paths, and leaves out files modified less than
 #     2 s before the run (input_digest.cpp, kRacyNs), so its bytes depend on when the samples
@@ -47,15 +49,16 @@
 #     "seconds_per_image" and "images_per_second", at any depth, become null (wall times); the
 #     rest (computed/resumed/failed counts, jobs, version) is compared.
 #   - normalised: in every file without a NUL byte (text: JSON, CSV, TSV, HTML, SVG, ipynb,
-#     stdout), the scratch folder's absolute path becomes @SCRATCH@; it is in summary.json's
-#     options, .batch/job.json and .report/job.json fingerprints, report.html and the notebook.
+#     stdout), the scratch folder's absolute path becomes @SCRATCH@: the dataset (and
+#     --detections) paths in summary.json (visibility, estimate, report, simulate), in the
+#     .batch/job.json and .report/job.json fingerprints and in report.html.
 #     Binary files (PNG, binary PLY) are hashed as written.
 # Environment: LC_ALL=C for every run. CLUTTERSCOPE_COMPARE_KEEP=1 keeps the scratch folder
 # (it is also kept, and its path printed, when check finds differences).
 set -euo pipefail
 
 usage() {
-  sed -n '5,11p' "$0" | sed 's/^# \{0,1\}//' >&2
+  sed -n '5,12p' "$0" | sed 's/^# \{0,1\}//' >&2
   exit 2
 }
 [[ $# -ge 2 && $# -le 3 ]] || usage
@@ -78,7 +81,9 @@ fi
 
 scratch="$(mktemp -d "${TMPDIR:-/tmp}/clutterscope-compare.XXXXXX")"
 keep="${CLUTTERSCOPE_COMPARE_KEEP:-0}"
-cleanup() { if [[ "$keep" != 1 ]]; then rm -rf "$scratch"; else echo "scratch kept: $scratch" >&2; fi; }
+cleanup() {
+  if [[ "$keep" == 1 ]]; then echo "scratch kept: $scratch" >&2; else rm -rf "$scratch"; fi
+}
 trap cleanup EXIT
 export LC_ALL=C
 
