@@ -5,7 +5,8 @@
 // disparity quantisation of triangulating sensors (depth step Z^2 s / (f b)), quantisation of
 // the output units, the projector/second imager's occlusion shadow, missing returns at grazing
 // angles, at depth discontinuities, on dark or specular materials and at random, lateral noise
-// and flying pixels at depth edges, and depth-to-colour misregistration. Model misfit (the
+// (axial error on slopes, moved edges), the matching window's losses and noise near depth
+// edges, flying pixels at depth edges, and depth-to-colour misregistration. Model misfit (the
 // observation rendered from a perturbed model) is drawn here and applied by the renderer's
 // caller. Presets for Kinect v1, Asus Xtion, RealSense D415 and D435: sensor_preset().
 
