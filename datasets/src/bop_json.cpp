@@ -227,6 +227,13 @@ int key_as_id(const std::string& key, const char* what, const FieldContext& cont
         return std::isdigit(static_cast<unsigned char>(c));
       });
   if (!digits) context.fail(std::string(what) + " key \"" + key + "\" is not an integer id");
+  // BOP writes str(int): "09" next to "9" would name one id twice, and every lookup goes by
+  // the canonical key.
+  if (key.size() > 1 && key.front() == '0') {
+    context.fail(std::string(what) + " key \"" + key +
+                 "\" has a leading zero (ids are written as plain integers, e.g. \"" +
+                 std::to_string(std::stoi(key)) + "\")");
+  }
   return std::stoi(key);
 }
 

@@ -536,7 +536,7 @@ std::shared_ptr<const BopDataset::SceneFiles> BopDataset::scene(const std::strin
     const std::string image_where = location(scene_id, im_id);
     ImageRecord& record = files->images[im_id];
     try {
-      record.camera = parse_camera(camera_json[key], default_depth_scale,
+      record.camera = parse_camera(camera_json.at(key), default_depth_scale,
                                    FieldContext{camera_path, image_where});
       if (!image_size) {
         throw DatasetError(files->dir, image_where +

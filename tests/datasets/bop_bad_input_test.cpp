@@ -345,6 +345,15 @@ TEST_F(BopBadInput, ImageKeyThatIsNotAnId) {
                   {"scene_camera.json", "scene 1", "key \"one\" is not an integer id"});
 }
 
+// "09" next to "9" would name one image twice, and the lookup by the canonical key "9" would
+// miss it (found by fuzzing bop_scene_camera: a read of a freed JSON node).
+TEST_F(BopBadInput, ImageKeyWithALeadingZeroIsRefused) {
+  replace_first(scene_file("scene_camera.json"), "\"1\":", "\"01\":");
+  const BopDataset dataset = BopDataset::open(dir_.path());
+  expect_mentions(dataset_error([&] { dataset.list_images({}); }),
+                  {"scene_camera.json", "scene 1", "key \"01\" has a leading zero"});
+}
+
 TEST_F(BopBadInput, GraphIndexOutOfRange) {
   replace_first(scene_file("scene_graph.json"), "\"support\": [[0, 1]]", "\"support\": [[0, 7]]");
   expect_mentions(load_error(), {"scene_graph.json", "scene 1, image 0: support[0]",
