@@ -2,7 +2,7 @@
 """Makes datasets/samples/ycbv_real: a few real YCB-Video frames (BOP layout) and their models.
 
 Usage: scripts/make_ycbv_sample.py SOURCE OUT SCENE/IMAGE...
-  e.g. scripts/make_ycbv_sample.py ../shared/data/ycbv_real datasets/samples/ycbv_real \
+  e.g. scripts/make_ycbv_sample.py PATH/TO/ycbv_real datasets/samples/ycbv_real \
          0/1 0/10 3/138
 
 SOURCE is a BOP folder with split test/ (the ycbv_real conversion). The chosen images keep
