@@ -9,7 +9,7 @@
 #include <clutterscope/datasets/files.hpp>
 #include <functional>
 
-#include "datasets/bop_fixture_support.hpp"
+#include "bop_fixture_support.hpp"
 
 namespace clutterscope::datasets {
 namespace {

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <thread>
 
-#include "datasets/bop_fixture_support.hpp"
+#include "bop_fixture_support.hpp"
 
 namespace clutterscope::datasets {
 namespace {

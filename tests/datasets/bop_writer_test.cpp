@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
-#include "datasets/bop_fixture_support.hpp"
+#include "bop_fixture_support.hpp"
 
 namespace clutterscope::datasets {
 namespace {

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <string>
 
-#include "datasets/bop_fixture_support.hpp"
+#include "bop_fixture_support.hpp"
 
 namespace clutterscope::datasets {
 namespace {
@@ -23,9 +23,9 @@ cv::Mat rendered_depth(float rendered_mm, int object_columns) {
 }
 
 TEST(DepthCheck, MedianRatioOverPixelsWhereBothHaveDepth) {
-  const cv::Mat rendered = rendered_depth(800.0f, 20);  // 600 object pixels
+  const cv::Mat rendered = rendered_depth(800.0f, 20);    // 600 object pixels
   cv::Mat measured(30, 40, CV_32F, cv::Scalar(8000.0f));  // 10x everywhere (background too)
-  measured.rowRange(0, 10).setTo(0);                     // no return in the top third
+  measured.rowRange(0, 10).setTo(0);                      // no return in the top third
   const DepthRatio ratio = measure_depth_ratio(measured, rendered, DepthCheckOptions{});
   EXPECT_EQ(ratio.overlap_pixels, 20 * 20);  // object columns below the hole
   ASSERT_TRUE(ratio.median);
@@ -50,9 +50,9 @@ TEST(DepthCheck, TooFewOverlappingPixelsGiveNoVerdict) {
   EXPECT_FALSE(ratio.median);
   EXPECT_NO_THROW(check_depth_scale(measured, rendered, 1.0, DepthCheckOptions{}, "d.png", ""));
   // 4 columns: 120 pixels, enough for a verdict.
-  EXPECT_THROW(check_depth_scale(measured, rendered_depth(800.0f, 4), 1.0, DepthCheckOptions{},
-                                 "d.png", ""),
-               DatasetError);
+  EXPECT_THROW(
+      check_depth_scale(measured, rendered_depth(800.0f, 4), 1.0, DepthCheckOptions{}, "d.png", ""),
+      DatasetError);
 }
 
 TEST(DepthCheck, LargeImagesAreSampledOnAnEvenGrid) {
@@ -67,12 +67,12 @@ TEST(DepthCheck, LargeImagesAreSampledOnAnEvenGrid) {
 }
 
 TEST(DepthCheck, LikelyScaleIsTheNearestPowerOfTen) {
-  EXPECT_DOUBLE_EQ(likely_depth_scale(10.0, 1.0), 0.1);    // 1.0 written for 0.1
-  EXPECT_DOUBLE_EQ(likely_depth_scale(0.1, 0.1), 1.0);     // 0.1 written for 1.0
+  EXPECT_DOUBLE_EQ(likely_depth_scale(10.0, 1.0), 0.1);     // 1.0 written for 0.1
+  EXPECT_DOUBLE_EQ(likely_depth_scale(0.1, 0.1), 1.0);      // 0.1 written for 1.0
   EXPECT_DOUBLE_EQ(likely_depth_scale(1000.0, 1.0), 1e-3);  // metres read as mm
-  EXPECT_DOUBLE_EQ(likely_depth_scale(8.0, 1.0), 0.1);     // log10 8 = 0.90 -> 10
-  EXPECT_DOUBLE_EQ(likely_depth_scale(3.0, 1.0), 1.0);     // log10 3 = 0.48 -> 1
-  EXPECT_DOUBLE_EQ(likely_depth_scale(0.5, 0.1), 0.1);     // log10 0.5 = -0.30 -> 1
+  EXPECT_DOUBLE_EQ(likely_depth_scale(8.0, 1.0), 0.1);      // log10 8 = 0.90 -> 10
+  EXPECT_DOUBLE_EQ(likely_depth_scale(3.0, 1.0), 1.0);      // log10 3 = 0.48 -> 1
+  EXPECT_DOUBLE_EQ(likely_depth_scale(0.5, 0.1), 0.1);      // log10 0.5 = -0.30 -> 1
 }
 
 TEST(DepthCheck, RatioIsPrintedWithThreeSignificantDigits) {

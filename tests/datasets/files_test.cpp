@@ -15,7 +15,7 @@
 #include <fstream>
 #include <functional>
 
-#include "datasets/bop_fixture_support.hpp"
+#include "bop_fixture_support.hpp"
 
 namespace clutterscope::datasets {
 namespace {

@@ -11,8 +11,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "bop_fixture_support.hpp"
 #include "cli_run.hpp"
-#include "datasets/bop_fixture_support.hpp"
 
 namespace clutterscope::visibility {
 namespace {

@@ -12,7 +12,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
-#include "datasets/bop_fixture_support.hpp"
+#include "bop_fixture_support.hpp"
 
 namespace clutterscope::visibility {
 namespace {

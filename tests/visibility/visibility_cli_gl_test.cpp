@@ -14,8 +14,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
+#include "bop_fixture_support.hpp"
 #include "cli_run.hpp"
-#include "datasets/bop_fixture_support.hpp"
 
 namespace clutterscope::visibility {
 namespace {

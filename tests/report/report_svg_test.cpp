@@ -1,0 +1,215 @@
+#include <gtest/gtest.h>
+
+#include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/report/plots.hpp>
+#include <clutterscope/report/svg.hpp>
+#include <opencv2/core.hpp>
+
+#include "report_test_tables.hpp"
+
+namespace clutterscope::report {
+namespace {
+
+class ReportSvg : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = testing::fresh_dir("svg"); }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  // Writes the SVG as a standalone file and parses it with Python's XML parser.
+  bool well_formed(const std::string& name, const std::string& svg) {
+    const auto path = dir_ / (name + ".svg");
+    testing::write_text(path, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n" + svg);
+    return testing::is_well_formed_svg(path);
+  }
+  static int count(const std::string& text, const std::string& needle) {
+    int n = 0;
+    for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + 1)) {
+      ++n;
+    }
+    return n;
+  }
+  std::filesystem::path dir_;
+};
+
+TEST_F(ReportSvg, ParserRejectsBrokenSvg) {
+  // The check below is only worth something if it can fail.
+  EXPECT_FALSE(well_formed("broken", "<svg xmlns=\"http://www.w3.org/2000/svg\"><g></svg>"));
+  EXPECT_FALSE(well_formed("html", "<html></html>"));
+}
+
+TEST_F(ReportSvg, VarianceScatterHasLogAxisUnitsColourBarAndThreshold) {
+  std::vector<ObjectRow> rows;
+  for (int i = 0; i < 4; ++i) {
+    rows.push_back(testing::object(0.2 + 0.2 * i, 0.01 * std::pow(10.0, i), 0.5 * i, 0, i));
+  }
+  rows.push_back(testing::object(0.5, 0.3, std::nullopt, 0, 9));
+  const std::string svg = variance_visibility_plot(rows, 0.25, 1.0);
+  EXPECT_TRUE(well_formed("variance", svg));
+  EXPECT_EQ(count(svg, "<circle"), 5 + 1);  // 5 points + the grey legend marker
+  for (const char* tick : {">0.01<", ">0.1<", ">1<", ">10<"}) {
+    EXPECT_NE(svg.find(tick), std::string::npos) << tick;
+  }
+  EXPECT_NE(svg.find("object visibility V_i (%)"), std::string::npos);
+  EXPECT_NE(svg.find("position variance (cm\u00b2, log scale)"), std::string::npos);
+  EXPECT_NE(svg.find("position error (cm)"), std::string::npos);
+  EXPECT_NE(svg.find("threshold 0.25 cm\u00b2"), std::string::npos);
+  EXPECT_NE(svg.find("stroke-dasharray"), std::string::npos);
+}
+
+TEST_F(ReportSvg, LogAxisPlacesDecadesEvenly) {
+  svg::Chart chart("t", {"x (m)", true, 0.01, 100.0}, {"y (m)", false, 0.0, 1.0}, 600, 400);
+  chart.add_line({0.01, 100.0}, {0.0, 1.0}, svg::category_colour(0), "line");
+  const std::string svg = chart.render();
+  EXPECT_TRUE(well_formed("log", svg));
+  // Plot area x from 78 to 600 - 24 - 190 = 386: four decades of 77 px each.
+  for (const char* x :
+       {"x=\"78.00\"", "x=\"155.00\"", "x=\"232.00\"", "x=\"309.00\"", "x=\"386.00\""}) {
+    EXPECT_NE(svg.find(x), std::string::npos) << x;
+  }
+  EXPECT_NE(svg.find("points=\"78.00,344.00 386.00,40.00\""), std::string::npos) << svg;
+}
+
+TEST_F(ReportSvg, WideLogRangesLabelEverySecondDecade) {
+  svg::Chart chart("t", {"x (1)", false, {}, {}}, {"y (1)", true, {}, {}});
+  chart.add_scatter({1, 2}, {1e-6, 1e6}, svg::category_colour(0), "pts");
+  const std::string svg = chart.render();
+  EXPECT_NE(svg.find(">1e-06<"), std::string::npos) << svg;
+  EXPECT_NE(svg.find(">0.0001<"), std::string::npos);
+  EXPECT_EQ(svg.find(">1e-05<"), std::string::npos);
+  EXPECT_NE(svg.find(">1e+06<"), std::string::npos);
+}
+
+TEST_F(ReportSvg, NonPositiveValuesOnLogAxisAreCountedNotDrawn) {
+  svg::Chart chart("t", {"x (1)", false, {}, {}}, {"y (1)", true, {}, {}});
+  chart.add_scatter({1, 2, 3}, {0.0, -1.0, 5.0}, svg::category_colour(0), "pts");
+  const std::string svg = chart.render();
+  EXPECT_TRUE(well_formed("nonpositive", svg));
+  EXPECT_NE(svg.find("2 points &lt;= 0 not drawn on the log axis"), std::string::npos);
+  EXPECT_EQ(svg.find("nan"), std::string::npos);
+  EXPECT_EQ(svg.find("inf"), std::string::npos);
+}
+
+TEST_F(ReportSvg, ThresholdSweepHistogramAndBarsAreWellFormed) {
+  const auto rows = testing::synthetic_dataset(6);
+  const ThresholdAnalysis analysis = analyse_thresholds(rows, {});
+  const std::string sweep = threshold_sweep_plot(analysis);
+  EXPECT_TRUE(well_formed("sweep", sweep));
+  EXPECT_EQ(count(sweep, "<polyline"), 3);
+  EXPECT_NE(sweep.find("variance threshold T (cm\u00b2, log scale)"), std::string::npos);
+
+  const std::string histogram = visibility_histogram_plot(rows, 0.3);
+  EXPECT_TRUE(well_formed("histogram", histogram));
+  EXPECT_NE(histogram.find("objects (count)"), std::string::npos);
+
+  std::vector<ObjectRow> image = {testing::object(0.86, 0.1, 0.2, 0, 0),
+                                  testing::object(0.05, 3.0, 2.0, 0, 1),
+                                  testing::object(1.0, 0.01, 0.1, 0, 2)};
+  image[1].label = "protein <box> & co";
+  const std::string bars = image_visibility_plot("Fig. 5", image, 0.3);
+  EXPECT_TRUE(well_formed("bars", bars));
+  EXPECT_NE(bars.find("protein &lt;box&gt; &amp; co (gt 1)"), std::string::npos);
+  // 5% is below the cutoff: red; 86% and 100% are black.
+  EXPECT_NE(bars.find("fill=\"#cc0000\" font-weight=\"bold\">5%<"), std::string::npos) << bars;
+  EXPECT_NE(bars.find("fill=\"#000000\" font-weight=\"bold\">86%<"), std::string::npos);
+  EXPECT_NE(bars.find("fill=\"#000000\" font-weight=\"bold\">100%<"), std::string::npos);
+}
+
+TEST_F(ReportSvg, Base64MatchesRfc4648Vectors) {
+  EXPECT_EQ(svg::base64(""), "");
+  EXPECT_EQ(svg::base64("f"), "Zg==");
+  EXPECT_EQ(svg::base64("fo"), "Zm8=");
+  EXPECT_EQ(svg::base64("foo"), "Zm9v");
+  EXPECT_EQ(svg::base64("foobar"), "Zm9vYmFy");
+  EXPECT_EQ(svg::base64(std::string("\xff\xfe\x00", 3)), "//4A");
+}
+
+TEST_F(ReportSvg, ProjectionUsesThePinholeModelAndDropsPointsBehindTheCamera) {
+  Eigen::Matrix3d K;
+  K << 500, 0, 320, 0, 400, 240, 0, 0, 1;
+  const auto pixels =
+      svg::project_to_pixels(K, {{0, 0, 1}, {0.1, -0.2, 2}, {0.1, 0.1, -1}, {0.3, 0.3, 0}});
+  ASSERT_EQ(pixels.size(), 2u);
+  EXPECT_DOUBLE_EQ(pixels[0][0], 320);
+  EXPECT_DOUBLE_EQ(pixels[0][1], 240);
+  EXPECT_DOUBLE_EQ(pixels[1][0], 320 + 500 * 0.05);
+  EXPECT_DOUBLE_EQ(pixels[1][1], 240 - 400 * 0.1);
+}
+
+TEST_F(ReportSvg, ImagePanelsEmbedThePngAndDrawEachObject) {
+  cv::Mat raster(60, 80, CV_8UC3, cv::Scalar(40, 80, 120));
+  const svg::BackgroundImage background = svg::BackgroundImage::from_raster(raster);
+  EXPECT_EQ(background.width, 80);
+  EXPECT_EQ(background.height, 60);
+  // Read back from a file: same bytes, size from the IHDR chunk.
+  testing::write_text(dir_ / "bg.png", background.png_bytes);
+  const auto from_file = svg::BackgroundImage::from_png_file(dir_ / "bg.png");
+  EXPECT_EQ(from_file.png_bytes, background.png_bytes);
+  EXPECT_EQ(from_file.width, 80);
+  EXPECT_EQ(from_file.height, 60);
+  testing::write_text(dir_ / "not.png", "GIF89a....................");
+  EXPECT_THROW(svg::BackgroundImage::from_png_file(dir_ / "not.png"), datasets::DatasetError);
+
+  svg::ProjectedObject coffee{"coffee",
+                              svg::category_colour(0),
+                              {{10, 10}, {20, 30}, {500, 5}},
+                              std::array<double, 2>{15, 20},
+                              true,
+                              std::nullopt};
+  svg::ProjectedObject tea{"tea",       svg::category_colour(1), {{70, 50}}, std::nullopt, true,
+                           std::nullopt};
+  const std::string svg =
+      svg::image_panels("Beliefs", background,
+                        {{"initial beliefs", {coffee, tea}}, {"final estimates", {coffee}}}, 160);
+  EXPECT_TRUE(well_formed("panels", svg));
+  // The image is embedded once and used by both panels.
+  EXPECT_EQ(count(svg, "href=\"data:image/png;base64," + svg::base64(background.png_bytes)), 1);
+  EXPECT_EQ(count(svg, "<use href=\"#bg-"), 2);
+  // Panel scale 2: the first sample (10, 10) lands at (12 + 20, 62 + 20).
+  EXPECT_NE(svg.find("cx=\"32.00\" cy=\"82.00\" r=\"1.8\""), std::string::npos) << svg;
+  // (500, 5) is outside the 80 x 60 image: clipped. Samples: 2 + 1 + 2 = 5.
+  EXPECT_EQ(count(svg, "r=\"1.8\""), 5);
+  // Estimate ring (halo + ring) in both panels, and once in the marker legend.
+  EXPECT_EQ(count(svg, "r=\"7\""), 2 * 2 + 2);
+  EXPECT_NE(svg.find(">confident estimate<"), std::string::npos);
+  EXPECT_EQ(svg.find(">not confident estimate<"), std::string::npos);
+  EXPECT_NE(svg.find(">coffee<"), std::string::npos);
+  EXPECT_NE(svg.find(">tea<"), std::string::npos);
+  EXPECT_EQ(svg.find("http://", svg.find("xmlns") + 40), std::string::npos);
+
+  // A figure with another title gets another image id: two figures can share one HTML page.
+  const std::string other = svg::image_panels("Other", background, {{"final", {coffee}}}, 160);
+  const auto id_of = [](const std::string& text) {
+    const size_t at = text.find("<image id=\"");
+    return text.substr(at + 11, text.find('"', at + 11) - at - 11);
+  };
+  EXPECT_NE(id_of(svg), id_of(other));
+}
+
+TEST_F(ReportSvg, ImagePanelsMarkUncertainEstimatesAndGroundTruth) {
+  const svg::BackgroundImage background =
+      svg::BackgroundImage::from_raster(cv::Mat(60, 80, CV_8UC1, cv::Scalar(90)));
+  const svg::ProjectedObject sure{"sure", svg::category_colour(0),
+                                  {},     std::array<double, 2>{20, 20},
+                                  true,   std::array<double, 2>{22, 21}};
+  const svg::ProjectedObject unsure{
+      "unsure", svg::category_colour(1), {}, std::array<double, 2>{60, 40}, false, std::nullopt};
+  const std::string svg =
+      svg::image_panels("Estimates", background, {{"final", {sure, unsure}}}, 80);
+  EXPECT_TRUE(well_formed("markers", svg));
+  // Scale 1, panel at (12, 62): the uncertain estimate is a dashed ring at (72, 102).
+  EXPECT_NE(svg.find("<circle cx=\"72.00\" cy=\"102.00\" r=\"9\" stroke-dasharray"),
+            std::string::npos)
+      << svg;
+  // The ground truth is a diamond (halo + outline) around (34, 83).
+  EXPECT_NE(svg.find("points=\"34.00,77.00 40.00,83.00 34.00,89.00 28.00,83.00\""),
+            std::string::npos)
+      << svg;
+  EXPECT_EQ(count(svg, "<polygon"), 2 * 2);  // the object's and the legend's
+  for (const char* entry :
+       {">confident estimate<", ">not confident estimate<", ">ground-truth centre<"}) {
+    EXPECT_NE(svg.find(entry), std::string::npos) << entry;
+  }
+  EXPECT_EQ(svg.find(">belief sample<"), std::string::npos);  // no samples drawn
+}
+
+}  // namespace
+}  // namespace clutterscope::report

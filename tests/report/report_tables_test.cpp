@@ -1,0 +1,187 @@
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/report/tables.hpp>
+
+#include "report_test_tables.hpp"
+
+namespace clutterscope::report {
+namespace {
+
+const char* kObjectsCsv =
+    "split,scene_id,im_id,gt_id,obj_id,label,px_count_all,px_count_valid,px_count_visib,"
+    "visib_fract,bbox_obj_x,bbox_obj_y,bbox_obj_w,bbox_obj_h,bbox_visib_x,bbox_visib_y,"
+    "bbox_visib_w,bbox_visib_h\n"
+    "test,1,0,0,3,coffee,1200,1000,860,0.86,-5,10,40,50,0,10,35,50\n"
+    "test,1,0,1,7,\"lemon tea, green\",800,800,40,0.05,100,120,30,30,110,120,10,12\n"
+    "test,1,0,2,9,tray,5000,4000,4000,1,0,0,300,200,0,0,300,200\n";
+
+const char* kEstimatesCsv =
+    "split,scene_id,im_id,gt_id,obj_id,label,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,"
+    "confident,err_cm,init_err_cm,ess_min,time_ms\n"
+    "test,1,0,1,7,lemon tea,10.5,-20,650,1.5,0.25,3,0,2.5,4,12.5,30\n"
+    "test,1,0,0,3,coffee,1,2,700,0.01,0.02,0.005,1,0.4,1.2,50,31\n";
+
+class ReportTables : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = testing::fresh_dir("tables"); }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::filesystem::path file(const std::string& name, const std::string& text) {
+    testing::write_text(dir_ / name, text);
+    return dir_ / name;
+  }
+  std::filesystem::path dir_;
+};
+
+TEST_F(ReportTables, ReadsAndJoinsVisibilityAndEstimates) {
+  auto objects = read_objects_csv(file("objects.csv", kObjectsCsv));
+  ASSERT_EQ(objects.size(), 3u);
+  EXPECT_EQ(objects[1].label, "lemon tea, green");
+  EXPECT_EQ(objects[0].bbox_obj[0], -5);
+  EXPECT_DOUBLE_EQ(objects[0].visib_fract, 0.86);
+  EXPECT_FALSE(objects[0].estimate);
+  EXPECT_FALSE(objects_csv_has_estimates(dir_ / "objects.csv"));
+
+  const auto estimates = read_estimates_csv(file("estimates.csv", kEstimatesCsv));
+  join_estimates(objects, estimates, dir_ / "estimates.csv");
+  ASSERT_TRUE(objects[0].estimate && objects[1].estimate);
+  EXPECT_FALSE(objects[2].estimate);  // the tray
+  EXPECT_DOUBLE_EQ(objects[1].estimate->max_variance_cm2(), 3.0);
+  EXPECT_DOUBLE_EQ(*objects[1].estimate->err_cm, 2.5);
+  EXPECT_TRUE(objects[0].estimate->confident);
+}
+
+TEST_F(ReportTables, JoinedTableRoundTripsToIdenticalBytes) {
+  auto objects = read_objects_csv(file("objects.csv", kObjectsCsv));
+  join_estimates(objects, read_estimates_csv(file("estimates.csv", kEstimatesCsv)),
+                 dir_ / "estimates.csv");
+  const std::string joined = format_objects_csv(objects);
+  const auto path = file("joined.csv", joined);
+  EXPECT_TRUE(objects_csv_has_estimates(path));
+  const auto again = read_objects_csv(path);
+  ASSERT_EQ(again.size(), 3u);
+  ASSERT_TRUE(again[1].estimate);
+  EXPECT_EQ(again[1].estimate->var_z_cm2, 3.0);
+  EXPECT_FALSE(again[2].estimate);
+  EXPECT_EQ(format_objects_csv(again), joined);
+  EXPECT_NE(joined.find("\"lemon tea, green\""), std::string::npos);
+}
+
+TEST_F(ReportTables, ReadsTheCalibrationColumnsAndKeepsThemThroughTheJoin) {
+  // estimates.csv of this version: per-axis errors, nees (empty: a zero variance),
+  // radius95_cm and confident_radius (empty without --confidence-radius-cm), the consistency
+  // checks (the lemon tea failed them).
+  const std::string estimates =
+      "split,scene_id,im_id,gt_id,obj_id,label,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,"
+      "confident,err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,"
+      "confident_radius,ess_min,seen_through,belief_shift,consistent,time_ms\n"
+      "test,1,0,1,7,lemon tea,10.5,-20,650,1.5,0.25,3,0,2.5,4,1.5,-2,0,,4.84,0,12.5,0.4,30,0,30\n"
+      "test,1,0,0,3,coffee,1,2,700,0.01,0.02,0.005,1,0.4,1.2,0.1,-0.2,0.3,20,0.395,1,50,0.01,1.5,"
+      "1,31\n";
+  auto objects = read_objects_csv(file("objects.csv", kObjectsCsv));
+  join_estimates(objects, read_estimates_csv(file("estimates.csv", estimates)),
+                 dir_ / "estimates.csv");
+  const PoseEstimate& lemon = *objects[1].estimate;
+  EXPECT_DOUBLE_EQ(*lemon.err_x_cm, 1.5);
+  EXPECT_DOUBLE_EQ(*lemon.err_y_cm, -2.0);
+  EXPECT_FALSE(lemon.nees);  // empty: missing, not a number
+  EXPECT_EQ(lemon.confident_radius, false);
+  EXPECT_DOUBLE_EQ(*objects[0].estimate->nees, 20.0);
+  EXPECT_EQ(objects[0].estimate->confident_radius, true);
+  // radius95_cm is derived from the variances: sqrt(7.8147 * 3) for the lemon tea.
+  EXPECT_NEAR(lemon.radius95_cm(), 4.841919424, 1e-8);
+  // The decisions at other thresholds keep the checks: inconsistent is never confident.
+  EXPECT_FALSE(lemon.consistent);
+  EXPECT_FALSE(lemon.confident_at(100.0));
+  EXPECT_FALSE(lemon.confident_within(100.0));
+  EXPECT_TRUE(objects[0].estimate->confident_at(0.02));
+  EXPECT_FALSE(objects[0].estimate->confident_at(0.019));
+
+  const std::string joined = format_objects_csv(objects);
+  EXPECT_NE(joined.find(",err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,"
+                        "confident_radius,ess_min,time_ms,consistent\n"),
+            std::string::npos);
+  const auto path = file("joined.csv", joined);
+  const auto again = read_objects_csv(path);
+  EXPECT_FALSE(again[1].estimate->consistent);
+  EXPECT_TRUE(again[0].estimate->consistent);
+  EXPECT_DOUBLE_EQ(*again[0].estimate->err_z_cm, 0.3);
+  EXPECT_FALSE(again[1].estimate->nees);
+  EXPECT_EQ(format_objects_csv(again), joined);
+  // The tray (no estimate) has every estimate column empty: as many fields as the header.
+  const std::string tray_line = joined.substr(joined.rfind("test,1,0,2"));
+  const std::string header = joined.substr(0, joined.find('\n'));
+  EXPECT_EQ(std::count(tray_line.begin(), tray_line.end(), ','),
+            std::count(header.begin(), header.end(), ','));
+}
+
+TEST_F(ReportTables, EstimatesOfEarlierVersionsHaveNoCalibrationColumns) {
+  auto objects = read_objects_csv(file("objects.csv", kObjectsCsv));
+  join_estimates(objects, read_estimates_csv(file("estimates.csv", kEstimatesCsv)),
+                 dir_ / "estimates.csv");
+  EXPECT_FALSE(objects[0].estimate->err_x_cm);
+  EXPECT_FALSE(objects[0].estimate->nees);
+  EXPECT_FALSE(objects[0].estimate->confident_radius);
+}
+
+TEST_F(ReportTables, FormatsNumbersInShortestRoundTripForm) {
+  EXPECT_EQ(format_number(0.25), "0.25");
+  EXPECT_EQ(format_number(1.0), "1");
+  EXPECT_EQ(format_number(-0.0), "0");
+  EXPECT_EQ(format_number(1e-5), "1e-05");
+  EXPECT_EQ(std::stod(format_number(0.1 + 0.2)), 0.1 + 0.2);
+}
+
+TEST_F(ReportTables, FailedEstimateRowsHaveNoEstimate) {
+  const std::string failed =
+      "split,scene_id,im_id,gt_id,obj_id,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,"
+      "confident,err_cm\ntest,1,0,0,3,,,,,,,0,\n";
+  const auto rows = read_estimates_csv(file("estimates.csv", failed));
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_FALSE(rows[0].estimate);
+}
+
+TEST_F(ReportTables, BadFieldsNameFileLineAndColumn) {
+  std::string bad = kObjectsCsv;
+  bad.replace(bad.find("0.86"), 4, "nan");
+  try {
+    read_objects_csv(file("objects.csv", bad));
+    FAIL() << "expected DatasetError";
+  } catch (const datasets::DatasetError& error) {
+    const std::string what = error.what();
+    EXPECT_NE(what.find("objects.csv"), std::string::npos) << what;
+    EXPECT_NE(what.find("line 2, column visib_fract"), std::string::npos) << what;
+  }
+  std::string out_of_range = kObjectsCsv;
+  out_of_range.replace(out_of_range.find("0.86"), 4, "1.5");
+  EXPECT_THROW(read_objects_csv(file("objects.csv", out_of_range)), datasets::DatasetError);
+  EXPECT_THROW(read_objects_csv(file("objects.csv", "split,scene_id\ntest,1\n")),
+               datasets::DatasetError);
+  EXPECT_THROW(read_objects_csv(dir_ / "missing.csv"), datasets::DatasetError);
+  std::string negative = kEstimatesCsv;
+  negative.replace(negative.find("1.5,0.25"), 3, "-1.5");
+  EXPECT_THROW(read_estimates_csv(file("estimates.csv", negative)), datasets::DatasetError);
+}
+
+TEST_F(ReportTables, JoinRefusesEstimatesOfOtherObjects) {
+  auto objects = read_objects_csv(file("objects.csv", kObjectsCsv));
+  std::string other_scene = kEstimatesCsv;
+  other_scene.replace(other_scene.find("test,1,0,1"), 10, "test,2,0,1");
+  try {
+    join_estimates(objects, read_estimates_csv(file("estimates.csv", other_scene)),
+                   dir_ / "estimates.csv");
+    FAIL() << "expected DatasetError";
+  } catch (const datasets::DatasetError& error) {
+    EXPECT_NE(std::string(error.what()).find("scene 2, image 0, gt 1"), std::string::npos)
+        << error.what();
+  }
+  std::string other_object = kEstimatesCsv;
+  other_object.replace(other_object.find("test,1,0,1,7"), 12, "test,1,0,1,8");
+  EXPECT_THROW(join_estimates(objects, read_estimates_csv(file("estimates.csv", other_object)),
+                              dir_ / "estimates.csv"),
+               datasets::DatasetError);
+}
+
+}  // namespace
+}  // namespace clutterscope::report

@@ -1,0 +1,56 @@
+#pragma once
+
+// Deterministic, locale-independent CSV and JSON writing for every table and summary the tools
+// produce. Numbers never come out as NaN or inf: CSV leaves the field empty, JSON writes null.
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <string_view>
+
+namespace clutterscope::batch {
+
+// `value` with exactly `decimals` digits after the point ("0.250000"); "" if not finite.
+std::string format_fixed(double value, int decimals);
+// `value` with `significant` significant digits, like printf's %g ("1.5e-07", "12.5");
+// "" if not finite.
+std::string format_general(double value, int significant = 6);
+// A CSV field: quoted (with doubled quotes) only when it holds ',', '"', '\n' or '\r'.
+std::string csv_escape(std::string_view text);
+
+// Builds one CSV row: CsvRow().add(split).add(scene).add(visib, 6).str() == "test,3,0.5\n".
+class CsvRow {
+ public:
+  CsvRow& add(std::string_view text);
+  CsvRow& add(const char* text) { return add(std::string_view(text)); }
+  CsvRow& add(const std::string& text) { return add(std::string_view(text)); }
+  CsvRow& add(int value);
+  CsvRow& add(long value);
+  CsvRow& add(long long value);
+  CsvRow& add(unsigned long value);
+  CsvRow& add(unsigned long long value);
+  CsvRow& add(double value, int decimals);  // format_fixed; empty field when not finite
+  CsvRow& add(bool value) = delete;         // say 0/1 explicitly
+  // The row with its trailing '\n'.
+  std::string str() const { return line_ + "\n"; }
+
+ private:
+  void separator();
+  std::string line_;
+  bool first_ = true;
+};
+
+// A JSON number, or null when not finite.
+nlohmann::json json_number(double value);
+// `value` rounded to `decimals` decimals (so summaries do not carry 17 digits of noise), or
+// null when not finite.
+nlohmann::json json_rounded(double value, int decimals);
+// Serialises with 2-space indent and a final newline; non-finite numbers become null.
+std::string dump_json(const nlohmann::json& value);
+// Writes `contents` to `path` atomically: datasets::write_file_atomically (a unique temporary
+// file in the same folder, then rename). Throws datasets::WriteError (exit 4) on I/O failure.
+void write_text_atomically(const std::filesystem::path& path, const std::string& contents);
+// dump_json written atomically (temporary file + rename).
+void write_json_atomically(const std::filesystem::path& path, const nlohmann::json& value);
+
+}  // namespace clutterscope::batch

@@ -1,0 +1,3 @@
+#include <clutterscope/cli/cli.hpp>
+
+int main(int argc, char** argv) { return clutterscope::cli::run_cli(argc, argv); }

@@ -1,0 +1,164 @@
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cctype>
+#include <clutterscope/batch/batch.hpp>
+#include <clutterscope/cli/cli.hpp>
+#include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/render/context.hpp>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "commands.hpp"
+
+namespace clutterscope::cli {
+
+namespace {
+
+constexpr int kExitUsage = 2;
+constexpr int kExitBadInput = 3;
+constexpr int kExitRuntime = 4;
+
+// One line per command, in the order `clutterscope --help` lists them.
+void add_commands(CLI::App& app, int* exit_code) {
+  add_render_command(app, exit_code);
+  add_visibility_command(app, exit_code);
+  add_merge_command(app, exit_code);
+  add_bench_visibility_command(app, exit_code);
+  add_generate_command(app, exit_code);
+  add_detect_command(app, exit_code);
+  add_graph_command(app, exit_code);
+  add_estimate_command(app, exit_code);
+  add_bench_estimate_command(app, exit_code);
+  add_bench_calibration_command(app, exit_code);
+  add_report_command(app, exit_code);
+  add_thresholds_command(app, exit_code);
+  add_simulate_command(app, exit_code);
+  add_sensor_fit_command(app, exit_code);
+  add_notebook_command(app, exit_code);
+}
+
+constexpr std::size_t kHelpWidth = 100;
+
+// Word-wraps each line of `text` to `width` columns.
+std::string wrap(const std::string& text, std::size_t width) {
+  std::string wrapped;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t end = std::min(text.find('\n', start), text.size());
+    std::string line = text.substr(start, end - start);
+    while (line.size() > width) {
+      std::size_t cut = line.rfind(' ', width);
+      if (cut == std::string::npos || cut == 0) cut = line.find(' ');
+      if (cut == std::string::npos) break;
+      wrapped += line.substr(0, cut) + "\n";
+      line = line.substr(cut + 1);
+    }
+    wrapped += line + "\n";
+    start = end + 1;
+  }
+  return wrapped;
+}
+
+// Up to the first line break or ". " followed by a capital ("Eq. 10" does not end it).
+std::string first_sentence(const std::string& text) {
+  std::size_t end = text.find('\n');
+  for (std::size_t dot = text.find(". "); dot != std::string::npos && dot < end;
+       dot = text.find(". ", dot + 1)) {
+    if (dot + 2 < text.size() && std::isupper(static_cast<unsigned char>(text[dot + 2]))) {
+      end = dot;
+      break;
+    }
+  }
+  return text.substr(0, end);
+}
+
+// Lists each command with the first sentence of its description (the full text is in the
+// command's own --help) and wraps long descriptions.
+class HelpFormatter : public CLI::Formatter {
+ public:
+  std::string make_subcommand(const CLI::App* command) const override {
+    std::string summary = first_sentence(command->get_description());
+    const std::size_t room = kHelpWidth - get_column_width() - 2;
+    if (summary.size() > room) {
+      summary = summary.substr(0, summary.rfind(' ', room - 4)) + " ...";
+    }
+    std::string name = "  " + command->get_display_name();
+    name.resize(std::max(name.size() + 1, get_column_width()), ' ');
+    return name + summary + "\n";
+  }
+  std::string make_description(const CLI::App* app) const override {
+    const std::string& description = app->get_description();
+    return description.empty() ? std::string() : wrap(description, kHelpWidth);
+  }
+  std::string make_option_desc(const CLI::Option* option) const override {
+    std::string text =
+        wrap(CLI::Formatter::make_option_desc(option), kHelpWidth - get_column_width());
+    text.pop_back();  // format_help adds the final newline
+    return text;
+  }
+};
+
+void describe_app(CLI::App& app) {
+  app.formatter(std::make_shared<HelpFormatter>());
+  app.description(
+      "clutterscope: visibility and pose-belief analysis of cluttered scenes (BOP datasets).\n"
+      "Run `clutterscope COMMAND --help` for a command's options.");
+  app.set_version_flag("--version", std::string("clutterscope ") + CLUTTERSCOPE_VERSION);
+  app.require_subcommand(1);
+  app.footer(
+      "Exit codes: 0 ok, 1 some images failed under --keep-going (listed in summary.json),\n"
+      "2 usage error, 3 bad input data (the message names file, scene, image and field),\n"
+      "4 rendering or runtime failure.");
+  app.get_formatter()->column_width(28);
+}
+
+}  // namespace
+
+std::vector<std::string> command_names() {
+  CLI::App app;
+  int exit_code = 0;
+  add_commands(app, &exit_code);
+  std::vector<std::string> names;
+  for (const CLI::App* command : app.get_subcommands({})) names.push_back(command->get_name());
+  return names;
+}
+
+CLI::App& bench_command_group(CLI::App& app) {
+  for (CLI::App* command : app.get_subcommands({})) {
+    if (command->get_name() == "bench") return *command;
+  }
+  CLI::App* bench =
+      app.add_subcommand("bench", "Benchmarks that print timings measured in one run");
+  bench->require_subcommand(1);
+  return *bench;
+}
+
+int run_cli(int argc, char** argv) {
+  CLI::App app;
+  describe_app(app);
+  int exit_code = 0;
+  add_commands(app, &exit_code);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    const int code = app.exit(error);
+    return code == 0 ? 0 : kExitUsage;
+  } catch (const batch::UsageError& error) {
+    std::cerr << "error: " << error.what() << "\n";
+    return kExitUsage;
+  } catch (const datasets::DatasetError& error) {
+    std::cerr << "error: " << error.what() << "\n";
+    return kExitBadInput;
+  } catch (const render::RenderError& error) {
+    std::cerr << "render error: " << error.what() << "\n";
+    return kExitRuntime;
+  } catch (const std::exception& error) {
+    std::cerr << "error: " << error.what() << "\n";
+    return kExitRuntime;
+  }
+  return exit_code;
+}
+
+}  // namespace clutterscope::cli

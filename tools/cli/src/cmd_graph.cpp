@@ -1,0 +1,104 @@
+// `clutterscope graph`: infer support and non-contact relations from GT poses and model extents
+// (the paper's a-priori scene graph) for datasets that have none, and print or write them.
+
+#include <clutterscope/batch/batch.hpp>
+#include <clutterscope/cli/dataset_options.hpp>
+#include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/datasets/graph_inference.hpp>
+#include <iostream>
+#include <map>
+#include <memory>
+
+#include "commands.hpp"
+
+namespace clutterscope::cli {
+
+namespace {
+
+struct GraphArguments {
+  std::string dataset;
+  std::string split = "test";
+  std::string scenes;
+  bool write = false;
+  double contact_tolerance_mm = 5.0;
+  double min_overlap_cm2 = 1.0;
+  double near_distance_mm = 50.0;
+};
+
+void run_graph(const GraphArguments& arguments) {
+  datasets::GraphInferenceOptions options;
+  options.contact_tolerance_m = arguments.contact_tolerance_mm / 1000.0;
+  options.min_overlap_m2 = arguments.min_overlap_cm2 * 1e-4;
+  options.near_distance_m = arguments.near_distance_mm / 1000.0;
+  std::string why;
+  if (!options.IsValid(&why)) throw batch::UsageError(why);
+  const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
+  std::vector<int> scene_ids = parse_id_list(arguments.scenes, "--scenes");
+  if (scene_ids.empty()) scene_ids = dataset.scene_ids(arguments.split);
+  std::map<datasets::GravitySource, int> sources;
+  nlohmann::ordered_json printed;
+  for (const int scene_id : scene_ids) {
+    datasets::DatasetSelection selection;
+    selection.splits = {arguments.split};
+    selection.scene_ids = {scene_id};
+    std::map<int, datasets::SceneGraph> graphs;
+    for (const auto& key : dataset.list_images(selection)) {
+      const datasets::SceneView view = dataset.load(key);
+      datasets::GravitySource source;
+      datasets::gravity_frame(view, datasets::fixed_instances(view, dataset.models(), options),
+                              &source);
+      ++sources[source];
+      graphs[key.im_id] = datasets::infer_scene_graph(view, dataset.models(), options);
+    }
+    const std::string json = datasets::scene_graphs_json(graphs);
+    char folder[16];
+    std::snprintf(folder, sizeof(folder), "%06d", scene_id);
+    if (arguments.write) {
+      datasets::write_file_atomically(
+          std::filesystem::path(arguments.dataset) / arguments.split / folder / "scene_graph.json",
+          json);
+    } else {
+      printed[std::to_string(scene_id)] = nlohmann::json::parse(json);
+    }
+  }
+  if (!arguments.write) std::cout << printed.dump(1) << "\n";
+  std::cerr << "graph: " << scene_ids.size() << " scenes; gravity frame from";
+  for (const auto& [source, count] : sources) {
+    std::cerr << " " << datasets::to_string(source) << " (" << count << " images)";
+  }
+  std::cerr << (arguments.write ? "; wrote scene_graph.json per scene\n" : "\n");
+}
+
+}  // namespace
+
+void add_graph_command(CLI::App& app, int* exit_code) {
+  auto arguments = std::make_shared<GraphArguments>();
+  CLI::App* command = app.add_subcommand(
+      "graph",
+      "Infer scene graphs from GT poses and model extents: support [parent, child] where the "
+      "child's bottom is within the contact tolerance of the parent's top and their footprints "
+      "overlap, the lowest objects on the tray/table (fixed), non_contact for nearby pairs. "
+      "Gravity from the camera world pose (cam_R_w2c), else the fixed support's pose, else an "
+      "upright camera. Prints JSON {scene_id: scene_graph.json contents}, or --write.");
+  command->add_option("DATASET", arguments->dataset, "BOP dataset folder")->required();
+  command->add_option("--split", arguments->split, "split folder")->capture_default_str();
+  command->add_option("--scenes", arguments->scenes, "scene ids, e.g. 1,2,5-7 (default all)");
+  command->add_flag("--write", arguments->write,
+                    "write SPLIT/SCENE/scene_graph.json (replacing an existing one)");
+  command->add_option("--contact-tolerance-mm", arguments->contact_tolerance_mm, "delta d (mm)")
+      ->capture_default_str();
+  command
+      ->add_option("--min-overlap-cm2", arguments->min_overlap_cm2,
+                   "footprint overlap needed for a support (cm^2)")
+      ->capture_default_str();
+  command
+      ->add_option("--near-mm", arguments->near_distance_mm,
+                   "non_contact pairs closer than this (mm)")
+      ->capture_default_str();
+  command->callback([arguments, exit_code]() {
+    run_graph(*arguments);
+    *exit_code = 0;
+  });
+}
+
+}  // namespace clutterscope::cli

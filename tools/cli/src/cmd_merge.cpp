@@ -1,0 +1,39 @@
+#include <clutterscope/batch/batch.hpp>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+
+namespace clutterscope::cli {
+
+void add_merge_command(CLI::App& app, int* exit_code) {
+  struct Arguments {
+    std::vector<std::string> inputs;
+    std::string out;
+    bool quiet = false;
+  };
+  auto arguments = std::make_shared<Arguments>();
+  CLI::App* command = app.add_subcommand(
+      "merge",
+      "Combine the output folders of a batch command run with --shard I/N into one folder whose "
+      "files are byte-identical to a single unsharded run. The folders must hold the same job "
+      "(same command, dataset, options and tool version); missing images are reported.");
+  command->add_option("DIR", arguments->inputs, "shard output folders (each holds .batch/)")
+      ->type_name("")
+      ->required()
+      ->check(CLI::Validator(CLI::ExistingDirectory).description(""));
+  command->add_option("--out", arguments->out, "merged output folder (may be one of the DIRs)")
+      ->type_name("DIR")
+      ->required();
+  command->add_flag("--quiet,-q", arguments->quiet, "no summary line");
+  command->callback([arguments, exit_code] {
+    batch::MergeOptions options;
+    options.inputs.assign(arguments->inputs.begin(), arguments->inputs.end());
+    options.out_dir = arguments->out;
+    options.quiet = arguments->quiet;
+    *exit_code = batch::merge_batches(options).exit_code();
+  });
+}
+
+}  // namespace clutterscope::cli

@@ -1,0 +1,41 @@
+#pragma once
+
+// Each command registers its subcommand and options on the app; the callback it installs runs
+// the command and throws on failure (see cli.cpp for the exit-code mapping). The returned
+// exit code (0, or 1 for --keep-going failures) is stored in *exit_code.
+
+#include <CLI/CLI.hpp>
+
+namespace clutterscope::scene_estimation {
+struct EstimateOptions;
+}
+
+namespace clutterscope::cli {
+
+// The `bench` command group, created by whichever benchmark registers first.
+CLI::App& bench_command_group(CLI::App& app);
+
+// --particles, --iterations, --gibbs-sweeps and --icp-samples, for every command that estimates.
+void add_nbp_options(CLI::App& command, scene_estimation::EstimateOptions& options);
+// Every option that maps onto EstimateOptions except --seed (add_nbp_options, the variance
+// threshold, --confidence-radius-cm, the unary, bandwidth, scoring models, --observation and the
+// depth checks): `estimate` and `bench calibration` take the same estimator options.
+void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions& options);
+
+void add_render_command(CLI::App& app, int* exit_code);
+void add_merge_command(CLI::App& app, int* exit_code);
+void add_visibility_command(CLI::App& app, int* exit_code);
+void add_bench_visibility_command(CLI::App& app, int* exit_code);
+void add_notebook_command(CLI::App& app, int* exit_code);
+void add_generate_command(CLI::App& app, int* exit_code);
+void add_detect_command(CLI::App& app, int* exit_code);
+void add_graph_command(CLI::App& app, int* exit_code);
+void add_estimate_command(CLI::App& app, int* exit_code);
+void add_bench_estimate_command(CLI::App& app, int* exit_code);
+void add_bench_calibration_command(CLI::App& app, int* exit_code);
+void add_report_command(CLI::App& app, int* exit_code);
+void add_thresholds_command(CLI::App& app, int* exit_code);
+void add_simulate_command(CLI::App& app, int* exit_code);
+void add_sensor_fit_command(CLI::App& app, int* exit_code);
+
+}  // namespace clutterscope::cli

@@ -1,0 +1,38 @@
+#include "depth_options.hpp"
+
+#include <cmath>
+
+namespace clutterscope::cli {
+
+void add_depth_check_options(CLI::App& command, datasets::DepthCheckOptions* options) {
+  command
+      .add_option_function<double>(
+          "--depth-scale", [options](double scale) { options->depth_scale = scale; },
+          "millimetres per depth PNG unit for every image, instead of the dataset's "
+          "depth_scale (scene_camera.json, camera.json)")
+      ->type_name("S")
+      ->check(CLI::Validator(
+          [](std::string& value) -> std::string {
+            try {
+              const double scale = std::stod(value);
+              if (scale > 0 && std::isfinite(scale)) return "";
+            } catch (const std::exception&) {
+              // not a number: reported below
+            }
+            return "--depth-scale must be a finite number > 0, got '" + value + "'";
+          },
+          "", ""));
+  command.add_flag_callback(
+      "--no-depth-check", [options] { options->check = false; },
+      "do not compare the measured depth with the rendered GT depth (by default an image whose "
+      "median ratio measured / rendered is outside [0.8, 1.25] is refused as a wrong "
+      "depth_scale)");
+}
+
+void add_depth_check_fingerprint(const datasets::DepthCheckOptions& options,
+                                 nlohmann::json* fingerprint) {
+  if (options.depth_scale) (*fingerprint)["depth_scale"] = *options.depth_scale;
+  if (!options.check) (*fingerprint)["depth_check"] = false;
+}
+
+}  // namespace clutterscope::cli

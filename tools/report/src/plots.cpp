@@ -1,0 +1,147 @@
+#include <algorithm>
+#include <clutterscope/report/plots.hpp>
+#include <cmath>
+#include <cstdio>
+
+namespace clutterscope::report {
+
+namespace {
+
+constexpr int kHistogramBins = 20;
+
+std::string format_g(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%g", value);
+  return buffer;
+}
+
+}  // namespace
+
+std::string variance_visibility_plot(const std::vector<ObjectRow>& objects,
+                                     double variance_threshold_cm2, double accurate_cm) {
+  svg::Chart chart("Belief variance against visibility",
+                   {"object visibility V_i (%)", false, 0.0, 100.0},
+                   {"max-axis position variance (cm\u00b2, log scale)", true, {}, {}});
+  std::vector<double> x, y, error, x_no_error, y_no_error;
+  for (const ObjectRow& object : objects) {
+    if (!object.estimate) continue;
+    if (object.estimate->err_cm) {
+      x.push_back(100.0 * object.visib_fract);
+      y.push_back(object.estimate->max_variance_cm2());
+      error.push_back(*object.estimate->err_cm);
+    } else {
+      x_no_error.push_back(100.0 * object.visib_fract);
+      y_no_error.push_back(object.estimate->max_variance_cm2());
+    }
+  }
+  chart.add_scatter(x, y, error, {"position error (cm)", 0.0, 3.0 * accurate_cm});
+  if (!x_no_error.empty()) {
+    chart.add_scatter(x_no_error, y_no_error, {150, 150, 150}, "no GT error");
+  }
+  chart.add_horizontal_line(variance_threshold_cm2, svg::warning_red(),
+                            "threshold " + format_g(variance_threshold_cm2) + " cm\u00b2");
+  return chart.render();
+}
+
+std::string threshold_sweep_plot(const ThresholdAnalysis& analysis) {
+  svg::Chart chart("Precision and recall of \"confident\" against \"accurate\" (error \u2264 " +
+                       format_g(analysis.options.accurate_cm) + " cm)",
+                   {"variance threshold T (cm\u00b2, log scale)", true, {}, {}},
+                   {"precision, recall, F1 (fraction)", false, 0.0, 1.0});
+  const auto curve = [&](auto member) {
+    std::vector<double> x, y;
+    for (const ThresholdRow& row : analysis.sweep) {
+      const Statistic& value = row.*member;
+      if (!value.defined()) continue;
+      x.push_back(row.threshold_cm2);
+      y.push_back(*value.value);
+    }
+    return std::make_pair(x, y);
+  };
+  const auto precision = curve(&ThresholdRow::precision);
+  const auto recall = curve(&ThresholdRow::recall);
+  const auto f1 = curve(&ThresholdRow::f1);
+  chart.add_line(precision.first, precision.second, svg::category_colour(0), "precision");
+  chart.add_line(recall.first, recall.second, svg::category_colour(1), "recall");
+  chart.add_line(f1.first, f1.second, svg::category_colour(2), "F1");
+  chart.add_vertical_line(
+      analysis.options.chosen_threshold_cm2, svg::warning_red(),
+      "chosen " + format_g(analysis.options.chosen_threshold_cm2) + " cm\u00b2");
+  const Statistic& recommended = analysis.recommendation.largest_with_min_precision;
+  if (recommended.defined()) {
+    char label[64];
+    std::snprintf(label, sizeof(label), "recommended %.3g cm\u00b2", *recommended.value);
+    chart.add_vertical_line(*recommended.value, svg::category_colour(4), label);
+  }
+  if (analysis.chosen_radius) {
+    // The radius decision is the variance threshold R^2 / chi2_3(0.95): the same curves.
+    char label[96];
+    std::snprintf(label, sizeof(label), "radius %g cm (= %.3g cm\u00b2)",
+                  analysis.chosen_radius->radius_cm, analysis.chosen_radius->row.threshold_cm2);
+    chart.add_vertical_line(analysis.chosen_radius->row.threshold_cm2, svg::category_colour(5),
+                            label);
+  }
+  return chart.render();
+}
+
+std::string calibration_plot(const Coverage& all, const Coverage& confident,
+                             const std::optional<Coverage>& confident_radius) {
+  svg::Chart chart(
+      "Calibration: do the 3-D ellipsoids cover their share of errors?",
+      {"nominal coverage p (ellipsoid NEES \u2264 \u03c7\u00b2\u2083(p), %)", false, 0.0, 100.0},
+      {"observed coverage (% of estimates)", false, 0.0, 100.0});
+  chart.add_line({0.0, 100.0}, {0.0, 100.0}, {120, 120, 120}, "honest (observed = nominal)", true);
+  const auto series = [&chart](const Coverage& coverage, int colour, const std::string& name) {
+    std::vector<double> x, y;
+    for (std::size_t level = 0; level < kCoverageLevels.size(); ++level) {
+      if (!coverage.observed[level].defined()) continue;
+      x.push_back(100.0 * kCoverageLevels[level].nominal);
+      y.push_back(100.0 * *coverage.observed[level].value);
+    }
+    if (x.empty()) return;
+    const std::string legend =
+        name + " (n = " + std::to_string(coverage.count - coverage.nees_missing) + ")";
+    chart.add_line(x, y, svg::category_colour(colour), legend);
+    chart.add_scatter(x, y, svg::category_colour(colour), "");  // listed with its line
+  };
+  series(all, 0, "all estimates");
+  series(confident, 1, "confident");
+  if (confident_radius) series(*confident_radius, 2, "confident by radius");
+  return chart.render();
+}
+
+std::string visibility_histogram_plot(const std::vector<ObjectRow>& objects,
+                                      double visibility_cutoff) {
+  std::vector<double> edges, counts(kHistogramBins, 0.0);
+  for (int b = 0; b <= kHistogramBins; ++b) edges.push_back(100.0 * b / kHistogramBins);
+  for (const ObjectRow& object : objects) {
+    const int bin =
+        std::clamp(static_cast<int>(std::floor(object.visib_fract * kHistogramBins + 1e-9)), 0,
+                   kHistogramBins - 1);
+    counts[bin] += 1.0;
+  }
+  svg::Chart chart("Object visibility", {"object visibility V_i (%)", false, 0.0, 100.0},
+                   {"objects (count)", false, {}, {}});
+  chart.add_histogram(edges, counts, svg::category_colour(0), "objects per 5% bin");
+  chart.add_vertical_line(100.0 * visibility_cutoff, svg::warning_red(),
+                          "cutoff " + format_g(100.0 * visibility_cutoff) + "%");
+  return chart.render();
+}
+
+std::string image_visibility_plot(const std::string& title,
+                                  const std::vector<ObjectRow>& image_objects,
+                                  double visibility_cutoff) {
+  std::vector<svg::Bar> bars;
+  for (size_t i = 0; i < image_objects.size(); ++i) {
+    const ObjectRow& object = image_objects[i];
+    char percent[16];
+    std::snprintf(percent, sizeof(percent), "%.0f%%", 100.0 * object.visib_fract);
+    const bool low = object.visib_fract < visibility_cutoff;
+    bars.push_back({object.label + " (gt " + std::to_string(object.gt_id) + ")",
+                    100.0 * object.visib_fract, svg::category_colour(static_cast<int>(i)), percent,
+                    low ? svg::warning_red() : svg::Colour{0, 0, 0}});
+  }
+  return svg::bar_chart(title, bars, {"object visibility V_i (%)", false, 0.0, 100.0});
+}
+
+}  // namespace clutterscope::report

@@ -1,0 +1,231 @@
+#include <charconv>
+#include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/report/calibration.hpp>
+#include <clutterscope/report/tables.hpp>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+#include "csv.hpp"
+
+namespace clutterscope::report {
+
+namespace {
+
+const std::vector<std::string> kVisibilityColumns = {
+    "split",        "scene_id",     "im_id",          "gt_id",          "obj_id",
+    "label",        "px_count_all", "px_count_valid", "px_count_visib", "visib_fract",
+    "bbox_obj_x",   "bbox_obj_y",   "bbox_obj_w",     "bbox_obj_h",     "bbox_visib_x",
+    "bbox_visib_y", "bbox_visib_w", "bbox_visib_h"};
+
+// Estimate columns shared by estimates.csv and the joined objects.csv.
+const std::vector<std::string> kEstimateColumns = {
+    "x_mm", "y_mm", "z_mm", "var_x_cm2", "var_y_cm2", "var_z_cm2", "confident", "err_cm"};
+
+std::optional<PoseEstimate> parse_estimate(const CsvTable& table, const CsvRecord& record) {
+  // A failed estimate is recorded with empty numeric columns.
+  if (table.text(record, "var_x_cm2").empty()) return std::nullopt;
+  PoseEstimate estimate;
+  estimate.x_mm = table.number(record, "x_mm");
+  estimate.y_mm = table.number(record, "y_mm");
+  estimate.z_mm = table.number(record, "z_mm");
+  estimate.var_x_cm2 = table.non_negative(record, "var_x_cm2");
+  estimate.var_y_cm2 = table.non_negative(record, "var_y_cm2");
+  estimate.var_z_cm2 = table.non_negative(record, "var_z_cm2");
+  estimate.confident = table.boolean(record, "confident");
+  estimate.err_cm = table.optional_non_negative(record, "err_cm");
+  if (table.has_column("init_err_cm")) {
+    estimate.init_err_cm = table.optional_non_negative(record, "init_err_cm");
+  }
+  for (const auto& [column, value] :
+       {std::pair<const char*, std::optional<double>*>{"err_x_cm", &estimate.err_x_cm},
+        {"err_y_cm", &estimate.err_y_cm},
+        {"err_z_cm", &estimate.err_z_cm}}) {
+    if (table.has_column(column)) *value = table.optional_number(record, column);
+  }
+  if (table.has_column("nees")) estimate.nees = table.optional_non_negative(record, "nees");
+  if (table.has_column("confident_radius") && !table.text(record, "confident_radius").empty()) {
+    estimate.confident_radius = table.boolean(record, "confident_radius");
+  }
+  if (table.has_column("ess_min")) estimate.ess_min = table.optional_number(record, "ess_min");
+  if (table.has_column("time_ms")) estimate.time_ms = table.optional_number(record, "time_ms");
+  if (table.has_column("consistent")) estimate.consistent = table.boolean(record, "consistent");
+  return estimate;
+}
+
+using Key = std::tuple<std::string, int, int, int>;
+
+}  // namespace
+
+double PoseEstimate::max_variance_cm2() const {
+  return std::max(var_x_cm2, std::max(var_y_cm2, var_z_cm2));
+}
+
+bool PoseEstimate::confident_at(double threshold_cm2) const {
+  return max_variance_cm2() <= threshold_cm2 && consistent;
+}
+
+bool PoseEstimate::confident_within(double radius_cm) const {
+  return confident_within_radius(max_variance_cm2(), radius_cm) && consistent;
+}
+
+double PoseEstimate::radius95_cm() const { return report::radius95_cm(max_variance_cm2()); }
+
+std::string format_number(double value) {
+  if (value == 0.0) return "0";  // also folds -0 into 0
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return std::string(buffer, result.ptr);
+}
+
+std::vector<ObjectRow> read_objects_csv(const std::filesystem::path& path) {
+  const CsvTable table = CsvTable::read(path, kVisibilityColumns);
+  bool with_estimates = true;
+  for (const auto& column : kEstimateColumns) with_estimates &= table.has_column(column);
+  std::vector<ObjectRow> rows;
+  rows.reserve(table.records().size());
+  std::set<Key> seen;
+  for (const CsvRecord& record : table.records()) {
+    ObjectRow row;
+    row.split = table.text(record, "split");
+    row.scene_id = table.integer(record, "scene_id");
+    row.im_id = table.integer(record, "im_id");
+    row.gt_id = table.integer(record, "gt_id");
+    row.obj_id = table.integer(record, "obj_id");
+    row.label = table.text(record, "label");
+    row.px_count_all = table.integer(record, "px_count_all");
+    row.px_count_valid = table.integer(record, "px_count_valid");
+    row.px_count_visib = table.integer(record, "px_count_visib");
+    row.visib_fract = table.number(record, "visib_fract");
+    if (row.visib_fract < 0.0 || row.visib_fract > 1.0) {
+      table.fail(record, "visib_fract", "must be in [0, 1]");
+    }
+    const char* bbox_suffix[4] = {"x", "y", "w", "h"};
+    for (int i = 0; i < 4; ++i) {
+      row.bbox_obj[i] = table.integer(record, std::string("bbox_obj_") + bbox_suffix[i]);
+      row.bbox_visib[i] = table.integer(record, std::string("bbox_visib_") + bbox_suffix[i]);
+    }
+    if (with_estimates) row.estimate = parse_estimate(table, record);
+    if (!seen.insert(Key(row.split, row.scene_id, row.im_id, row.gt_id)).second) {
+      table.fail(record, "gt_id", "duplicate object row");
+    }
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+bool objects_csv_has_estimates(const std::filesystem::path& path) {
+  const CsvTable table = CsvTable::read(path, kVisibilityColumns);
+  for (const auto& column : kEstimateColumns) {
+    if (!table.has_column(column)) return false;
+  }
+  return true;
+}
+
+std::vector<EstimateRow> read_estimates_csv(const std::filesystem::path& path) {
+  std::vector<std::string> required = {"split", "scene_id", "im_id", "gt_id", "obj_id"};
+  required.insert(required.end(), kEstimateColumns.begin(), kEstimateColumns.end());
+  const CsvTable table = CsvTable::read(path, required);
+  std::vector<EstimateRow> rows;
+  rows.reserve(table.records().size());
+  for (const CsvRecord& record : table.records()) {
+    EstimateRow row;
+    row.split = table.text(record, "split");
+    row.scene_id = table.integer(record, "scene_id");
+    row.im_id = table.integer(record, "im_id");
+    row.gt_id = table.integer(record, "gt_id");
+    row.obj_id = table.integer(record, "obj_id");
+    row.estimate = parse_estimate(table, record);
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+std::vector<ImageVisibilityRow> read_images_csv(const std::filesystem::path& path) {
+  const CsvTable table =
+      CsvTable::read(path, {"split", "scene_id", "im_id", "n_objects", "scene_visibility"});
+  std::vector<ImageVisibilityRow> rows;
+  for (const CsvRecord& record : table.records()) {
+    ImageVisibilityRow row;
+    row.split = table.text(record, "split");
+    row.scene_id = table.integer(record, "scene_id");
+    row.im_id = table.integer(record, "im_id");
+    row.n_objects = table.integer(record, "n_objects");
+    row.scene_visibility = table.number(record, "scene_visibility");
+    if (row.scene_visibility < 0.0 || row.scene_visibility > 1.0) {
+      table.fail(record, "scene_visibility", "must be in [0, 1]");
+    }
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+void join_estimates(std::vector<ObjectRow>& objects, const std::vector<EstimateRow>& estimates,
+                    const std::filesystem::path& estimates_file) {
+  std::map<Key, size_t> index;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    index[Key(objects[i].split, objects[i].scene_id, objects[i].im_id, objects[i].gt_id)] = i;
+  }
+  std::set<Key> joined;
+  for (const EstimateRow& estimate : estimates) {
+    const Key key(estimate.split, estimate.scene_id, estimate.im_id, estimate.gt_id);
+    const std::string where = "split " + estimate.split + ", " +
+                              datasets::location(estimate.scene_id, estimate.im_id, estimate.gt_id);
+    const auto found = index.find(key);
+    if (found == index.end()) {
+      throw datasets::DatasetError(estimates_file,
+                                   where + "estimate has no visibility row in objects.csv");
+    }
+    if (!joined.insert(key).second) {
+      throw datasets::DatasetError(estimates_file, where + "duplicate estimate");
+    }
+    ObjectRow& object = objects[found->second];
+    if (object.obj_id != estimate.obj_id) {
+      throw datasets::DatasetError(
+          estimates_file, where + "obj_id " + std::to_string(estimate.obj_id) +
+                              " differs from objects.csv obj_id " + std::to_string(object.obj_id));
+    }
+    object.estimate = estimate.estimate;
+  }
+}
+
+std::string format_objects_csv(const std::vector<ObjectRow>& objects) {
+  std::ostringstream out;
+  for (size_t i = 0; i < kVisibilityColumns.size(); ++i) {
+    out << (i ? "," : "") << kVisibilityColumns[i];
+  }
+  out << ",x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,max_var_cm2,confident,err_cm,"
+         "init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,confident_radius,ess_min,time_"
+         "ms,consistent\n";
+  const auto optional = [](const std::optional<double>& value) {
+    return value ? format_number(*value) : std::string();
+  };
+  for (const ObjectRow& row : objects) {
+    out << csv_escape(row.split) << ',' << row.scene_id << ',' << row.im_id << ',' << row.gt_id
+        << ',' << row.obj_id << ',' << csv_escape(row.label) << ',' << row.px_count_all << ','
+        << row.px_count_valid << ',' << row.px_count_visib << ',' << format_number(row.visib_fract);
+    for (int value : row.bbox_obj) out << ',' << value;
+    for (int value : row.bbox_visib) out << ',' << value;
+    if (row.estimate) {
+      const PoseEstimate& e = *row.estimate;
+      out << ',' << format_number(e.x_mm) << ',' << format_number(e.y_mm) << ','
+          << format_number(e.z_mm) << ',' << format_number(e.var_x_cm2) << ','
+          << format_number(e.var_y_cm2) << ',' << format_number(e.var_z_cm2) << ','
+          << format_number(e.max_variance_cm2()) << ',' << (e.confident ? 1 : 0) << ','
+          << optional(e.err_cm) << ',' << optional(e.init_err_cm) << ',' << optional(e.err_x_cm)
+          << ',' << optional(e.err_y_cm) << ',' << optional(e.err_z_cm) << ',' << optional(e.nees)
+          << ',' << format_number(e.radius95_cm()) << ','
+          << (e.confident_radius ? (*e.confident_radius ? "1" : "0") : "") << ','
+          << optional(e.ess_min) << ',' << optional(e.time_ms) << ',' << (e.consistent ? 1 : 0);
+    } else {
+      out << ",,,,,,,,,,,,,,,,,,,";
+    }
+    out << '\n';
+  }
+  return out.str();
+}
+
+}  // namespace clutterscope::report
