@@ -10,6 +10,7 @@
 
 #include "gl.hpp"
 #include "gl_program.hpp"
+#include "shader_sources.hpp"
 #include "window_bounds.hpp"
 
 namespace clutterscope::render {
@@ -97,150 +98,54 @@ Matrix4fColumnMajor projection_matrix(const Intrinsics& k, bool zero_to_one_clip
   return p.cast<float>();
 }
 
-constexpr const char* kVertexShader = R"(#version 330 core
-layout(location = 0) in vec3 position;
-uniform mat4 model_view;
-uniform mat4 projection;
-out float camera_z;
-void main() {
-  vec4 camera = model_view * vec4(position, 1.0);
-  camera_z = camera.z;
-  gl_Position = projection * camera;
-}
-)";
-
 // Texels (RGBA32F) per tile in the tile buffer of render_tiles: model-view matrix (4 columns),
 // projection (4 columns), ray parameters, (tile origin, depth map), (label low and high 16 bits
 // as exact floats, 0, 0).
 constexpr int kTexelsPerTile = 11;
 
-// render_tiles draws a run of tiles of the same mesh as one instanced draw: instance i reads its
-// pose and projection from the tile buffer and, with viewport arrays, selects viewport and
-// scissor i, so each tile is rasterised exactly as a separate draw into its own viewport would
-// be. The arithmetic matches kVertexShader operation for operation.
-std::string tile_vertex_shader(bool viewport_array) {
-  return std::string("#version 330 core\n") +
-         (viewport_array ? "#extension GL_ARB_shader_viewport_layer_array : require\n" : "") +
-         R"(layout(location = 0) in vec3 position;
-uniform samplerBuffer tiles;
-uniform int first_tile;
-out float camera_z;
-flat out mat4 tile_model_view;
-flat out vec4 tile_ray;
-flat out vec4 tile_origin_depth_map;
-flat out uint tile_label;
-void main() {
-  int base = (first_tile + gl_InstanceID) * )" +
-         std::to_string(kTexelsPerTile) + R"(;
-  mat4 model_view = mat4(texelFetch(tiles, base), texelFetch(tiles, base + 1),
-                         texelFetch(tiles, base + 2), texelFetch(tiles, base + 3));
-  mat4 projection = mat4(texelFetch(tiles, base + 4), texelFetch(tiles, base + 5),
-                         texelFetch(tiles, base + 6), texelFetch(tiles, base + 7));
-  vec4 camera = model_view * vec4(position, 1.0);
-  camera_z = camera.z;
-  gl_Position = projection * camera;
-  tile_model_view = model_view;
-  tile_ray = texelFetch(tiles, base + 8);
-  tile_origin_depth_map = texelFetch(tiles, base + 9);
-  vec4 label = texelFetch(tiles, base + 10);
-  tile_label = uint(label.x) | (uint(label.y) << 16);
-)" + (viewport_array ? "  gl_ViewportIndex = gl_InstanceID;\n" : "") +
-         "}\n";
-}
-
-// DepthMode::kExactPerTile: depth is the exact intersection of the pixel's ray with the
-// triangle's plane, computed from the pixel position relative to its tile. Interpolated
-// attributes depend on the absolute framebuffer position (llvmpipe evaluates plane equations
-// from the framebuffer origin, in float), so an interpolated tile differs in the last bits from
-// the same view rendered alone. The plane comes from a per-triangle buffer indexed by
-// gl_PrimitiveID, and the fragment depth is written from it so the depth test sees the same
+// The shaders of render/shaders/ (see its README for the placeholders).
+//
+// render_tiles draws a run of tiles of the same mesh as one instanced draw: instance i of
+// tiles.vert.glsl reads its pose and projection from the tile buffer and, with viewport arrays,
+// selects viewport and scissor i, so each tile is rasterised exactly as a separate draw into its
+// own viewport would be. The arithmetic matches renderer.vert.glsl operation for operation.
+//
+// DepthMode::kExactPerTile (EXACT_DEPTH in surface_depth.glsl): depth is the exact intersection
+// of the pixel's ray with the triangle's plane, computed from the pixel position relative to its
+// tile. Interpolated attributes depend on the absolute framebuffer position (llvmpipe evaluates
+// plane equations from the framebuffer origin, in float), so an interpolated tile differs in the
+// last bits from the same view rendered alone. The plane comes from a per-triangle buffer indexed
+// by gl_PrimitiveID, and the fragment depth is written from it so the depth test sees the same
 // value in every layout. It costs ~1.5-2x the interpolated shader on llvmpipe.
 // ray: window principal point (x, y) and focal lengths (fx, fy); tile_origin: window position
 // of the target's pixel (0, 0); depth_map: window depth = depth_map.x / Z + depth_map.y
 // (reversed).
-constexpr const char* kSurfaceDepth = R"(
-in float camera_z;
-#ifdef EXACT_DEPTH
-uniform samplerBuffer planes;     // model-frame plane (n, d) of each triangle: n.x = d
-float surface_z(mat4 model_view, vec4 ray, vec2 tile_origin, vec2 depth_map) {
-  vec4 plane = texelFetch(planes, gl_PrimitiveID);
-  vec3 n = mat3(model_view) * plane.xyz;
-  float d = plane.w + dot(n, model_view[3].xyz);
-  vec2 p = gl_FragCoord.xy - tile_origin;
-  vec3 r = vec3((p.x - ray.x) / ray.z, (p.y - ray.y) / ray.w, 1.0);
-  float z = d / dot(n, r);
-  // Grazing or degenerate triangles: the interpolated depth is the better estimate there.
-  if (!(abs(z - camera_z) <= 1e-3 * camera_z)) z = camera_z;
-  gl_FragDepth = depth_map.x / z + depth_map.y;
-  return z;
-}
-#else
-float surface_z(mat4 model_view, vec4 ray, vec2 tile_origin, vec2 depth_map) { return camera_z; }
-#endif
-)";
+//
+// coverage.frag.glsl has no early_fragment_tests: the image store makes the shader run for
+// hidden fragments too, so the coverage image receives every instance's full silhouette while
+// the depth test keeps the front label.
 
-// The per-draw parameters of surface_z as uniforms (render, count_visibility).
-constexpr const char* kSurfaceUniforms = R"(
-uniform mat4 model_view;
-uniform vec4 ray;
-uniform vec2 tile_origin;
-uniform vec2 depth_map;
-uniform uint label;
-)";
-
-std::string depth_label_fragment_shader(bool exact) {
-  return std::string("#version 330 core\n") + (exact ? "#define EXACT_DEPTH 1\n" : "") + R"(
-layout(location = 0) out float depth_out;
-layout(location = 1) out uint label_out;
-)" + kSurfaceUniforms +
-         kSurfaceDepth +
-         R"(
-void main() {
-  depth_out = surface_z(model_view, ray, tile_origin, depth_map);
-  label_out = label;
-}
-)";
+std::string tile_vertex_shader(bool viewport_array) {
+  std::string source = detail::shader_source("tiles.vert.glsl");
+  source = detail::fill_lines(
+      source, "EXTENSIONS",
+      viewport_array ? "#extension GL_ARB_shader_viewport_layer_array : require\n" : "");
+  source = detail::fill_text(source, "TEXELS_PER_TILE", std::to_string(kTexelsPerTile));
+  return detail::fill_lines(source, "SELECT_VIEWPORT",
+                            viewport_array ? "  gl_ViewportIndex = gl_InstanceID;\n" : "");
 }
 
-// The fragment shader of render_tiles: the same as depth_label_fragment_shader with the
-// parameters passed per tile from tile_vertex_shader.
-std::string tile_fragment_shader(bool exact) {
-  return std::string("#version 330 core\n") + (exact ? "#define EXACT_DEPTH 1\n" : "") + R"(
-layout(location = 0) out float depth_out;
-layout(location = 1) out uint label_out;
-flat in mat4 tile_model_view;
-flat in vec4 tile_ray;
-flat in vec4 tile_origin_depth_map;
-flat in uint tile_label;
-)" + kSurfaceDepth +
-         R"(
-void main() {
-  depth_out = surface_z(tile_model_view, tile_ray, tile_origin_depth_map.xy,
-                        tile_origin_depth_map.zw);
-  label_out = tile_label;
-}
-)";
-}
-
-// No early_fragment_tests: the image store makes the shader run for hidden fragments too, so
-// the coverage image receives every instance's full silhouette while the depth test keeps the
-// front label.
-std::string coverage_fragment_shader(bool exact) {
-  return std::string("#version 430 core\n") + (exact ? "#define EXACT_DEPTH 1\n" : "") + R"(
-layout(binding = 0, r32ui) uniform uimage2DArray coverage;
-uniform int coverage_layer;
-uniform uint coverage_bit;
-layout(location = 0) out float depth_out;
-layout(location = 1) out uint label_out;
-)" + kSurfaceUniforms +
-         kSurfaceDepth +
-         R"(
-void main() {
-  imageAtomicOr(coverage, ivec3(ivec2(gl_FragCoord.xy), coverage_layer), coverage_bit);
-  depth_out = surface_z(model_view, ray, tile_origin, depth_map);
-  label_out = label;
-}
-)";
+// A fragment shader of render/shaders/ with its DEFINES and the shared surface_z filled in;
+// `uniform_parameters`: surface_z's parameters are uniforms (render, count_visibility), not
+// per-tile inputs from tiles.vert.glsl.
+std::string fragment_shader(const char* file_name, bool exact, bool uniform_parameters) {
+  std::string source = detail::shader_source(file_name);
+  source = detail::fill_lines(source, "DEFINES", exact ? "#define EXACT_DEPTH 1\n" : "");
+  if (uniform_parameters) {
+    source = detail::fill_lines(source, "SURFACE_UNIFORMS",
+                                detail::shader_source("surface_uniforms.glsl"));
+  }
+  return detail::fill_lines(source, "SURFACE_DEPTH", detail::shader_source("surface_depth.glsl"));
 }
 
 struct Program {
@@ -610,7 +515,8 @@ Renderer::Renderer(const EglContext& context, const RendererOptions& options)
   if (state_->zero_to_one_clip) glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   state_->exact_depth = options.depth == DepthMode::kExactPerTile;
-  state_->depth_label = link(kVertexShader, depth_label_fragment_shader(state_->exact_depth));
+  state_->depth_label = link(detail::shader_source("renderer.vert.glsl"),
+                             fragment_shader("depth_label.frag.glsl", state_->exact_depth, true));
   const bool viewport_array = (version >= 41 || has_gl_extension("GL_ARB_viewport_array")) &&
                               has_gl_extension("GL_ARB_shader_viewport_layer_array");
   if (viewport_array) {
@@ -619,7 +525,7 @@ Renderer::Renderer(const EglContext& context, const RendererOptions& options)
     state_->tiles_per_draw = std::max(1, static_cast<int>(viewports));
   }
   state_->tiles = link(tile_vertex_shader(viewport_array && state_->tiles_per_draw > 1),
-                       tile_fragment_shader(state_->exact_depth));
+                       fragment_shader("tiles.frag.glsl", state_->exact_depth, false));
   state_->tile_buffer = gl::make_buffer();
   state_->tile_indices = gl::make_buffer();
   state_->tile_texture = gl::make_texture();
@@ -631,7 +537,8 @@ Renderer::Renderer(const EglContext& context, const RendererOptions& options)
   glBindTexture(GL_TEXTURE_BUFFER, 0);
   glBindBuffer(GL_TEXTURE_BUFFER, 0);
   if (state_->coverage_supported) {
-    state_->coverage = link(kVertexShader, coverage_fragment_shader(state_->exact_depth));
+    state_->coverage = link(detail::shader_source("renderer.vert.glsl"),
+                            fragment_shader("coverage.frag.glsl", state_->exact_depth, true));
   }
   gl::check_error("Renderer setup");
 }
