@@ -102,7 +102,7 @@ BopModel::~BopModel() = default;
 const Eigen::Vector3d& BopModel::bbox_min() const { return state_->bbox_min; }
 const Eigen::Vector3d& BopModel::bbox_size() const { return state_->bbox_size; }
 
-BopModel BopModel::upload(const Mesh& mesh) {
+BopModel BopModel::upload(const datasets::Mesh& mesh) {
   gl::check_uploadable(mesh, "BopModel::upload");
   BopModel model;
   State& state = *model.state_;

@@ -18,8 +18,8 @@ namespace {
 // See GpuMesh::State::closed_orientation. Vertices are welded by exact position (weld_vertices),
 // since meshes often duplicate vertices along seams of normals or texture coordinates; a mesh is
 // closed when every edge is used exactly once in each direction.
-int closed_orientation(const Mesh& mesh) {
-  const std::vector<std::uint32_t> welded = weld_vertices(mesh).index_of;
+int closed_orientation(const datasets::Mesh& mesh) {
+  const std::vector<std::uint32_t> welded = datasets::weld_vertices(mesh).index_of;
   std::unordered_map<std::uint64_t, int> directed_edges;
   directed_edges.reserve(mesh.triangles.size() * 3);
   double six_volume = 0;
@@ -43,7 +43,8 @@ int closed_orientation(const Mesh& mesh) {
 
 // Each triangle's model-frame unit normal and offset (n . a), in double for back-face culling
 // of tile runs and in float for the exact-depth shaders.
-void compute_triangle_planes(const Mesh& mesh, std::vector<Eigen::Vector4d>* planes_double,
+void compute_triangle_planes(const datasets::Mesh& mesh,
+                             std::vector<Eigen::Vector4d>* planes_double,
                              std::vector<Eigen::Vector4f>* planes_float) {
   planes_double->reserve(mesh.triangles.size());
   planes_float->reserve(mesh.triangles.size());
@@ -61,7 +62,7 @@ void compute_triangle_planes(const Mesh& mesh, std::vector<Eigen::Vector4d>* pla
 
 }  // namespace
 
-GpuMesh GpuMesh::upload(const Mesh& mesh) {
+GpuMesh GpuMesh::upload(const datasets::Mesh& mesh) {
   gl::check_uploadable(mesh, "GpuMesh::upload");
   GpuMesh gpu;
   State& state = *gpu.state_;
