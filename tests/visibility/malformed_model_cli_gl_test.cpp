@@ -6,8 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
-#include <clutterscope/render/context.hpp>
 #include <clutterscope/datasets/mesh.hpp>
+#include <clutterscope/render/context.hpp>
 #include <nlohmann/json.hpp>
 #include <sstream>
 

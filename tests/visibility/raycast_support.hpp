@@ -8,8 +8,8 @@
 // compare exactly only when no pixel is ambiguous, and within the ambiguous count otherwise.
 
 #include <Eigen/Geometry>
-#include <clutterscope/datasets/scene.hpp>
 #include <clutterscope/datasets/mesh.hpp>
+#include <clutterscope/datasets/scene.hpp>
 #include <clutterscope/visibility/bop_visibility.hpp>
 #include <cstdint>
 #include <opencv2/core.hpp>

@@ -6,9 +6,9 @@
 #include <algorithm>
 #include <chrono>
 #include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/estimator/bench.hpp>
 #include <clutterscope/render/context.hpp>
-#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/tools/batch.hpp>
 #include <clutterscope/tools/estimate/scene_estimate.hpp>
 #include <cmath>

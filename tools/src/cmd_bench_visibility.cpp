@@ -9,8 +9,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <clutterscope/render/context.hpp>
 #include <clutterscope/datasets/mesh.hpp>
+#include <clutterscope/render/context.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <clutterscope/tools/batch.hpp>
 #include <clutterscope/visibility/bop_visibility.hpp>

@@ -5,8 +5,8 @@
 #include <clutterscope/datasets/detector.hpp>
 #include <clutterscope/datasets/generator.hpp>
 #include <clutterscope/datasets/graph_inference.hpp>
-#include <clutterscope/render/context.hpp>
 #include <clutterscope/datasets/mesh.hpp>
+#include <clutterscope/render/context.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <clutterscope/tools/batch.hpp>
 #include <map>

@@ -9,9 +9,9 @@
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/files.hpp>
+#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/render/bop_renderer.hpp>
 #include <clutterscope/render/context.hpp>
-#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <clutterscope/tools/batch.hpp>
 #include <clutterscope/tools/formats.hpp>

@@ -9,8 +9,8 @@
 #include <clutterscope/datasets/catalogue.hpp>
 #include <clutterscope/datasets/detector.hpp>
 #include <clutterscope/datasets/generator.hpp>
-#include <clutterscope/datasets/sensor.hpp>
 #include <clutterscope/datasets/mesh.hpp>
+#include <clutterscope/datasets/sensor.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <cstdint>
 #include <filesystem>
