@@ -13,9 +13,9 @@
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/files.hpp>
+#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/render/bop_renderer.hpp>
 #include <clutterscope/render/context.hpp>
-#include <clutterscope/render/mesh.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <clutterscope/visibility/image_visibility.hpp>
 #include <clutterscope/visibility/overlay.hpp>
@@ -230,10 +230,10 @@ class VisibilityWorker {
   }
 
  private:
-  render::Mesh load_model(int obj_id, const std::string& where, double scale_to_metres) const {
+  datasets::Mesh load_model(int obj_id, const std::string& where, double scale_to_metres) const {
     const datasets::ModelInfo& model = dataset_.model(obj_id);
     try {
-      return render::load_mesh(model.mesh_path, {scale_to_metres});
+      return datasets::load_mesh(model.mesh_path, {scale_to_metres});
     } catch (const datasets::DatasetError& error) {
       std::string what = error.what();  // named once: drop the file before the reason
       const std::string prefix = error.file().string() + ": ";
@@ -248,7 +248,7 @@ class VisibilityWorker {
     auto found = meshes_.find(obj_id);
     if (found != meshes_.end()) return *found->second;
     auto gpu = std::make_unique<render::GpuMesh>(render::GpuMesh::upload(
-        load_model(obj_id, where, render::MeshLoadOptions{}.scale_to_metres)));
+        load_model(obj_id, where, datasets::MeshLoadOptions{}.scale_to_metres)));
     return *meshes_.emplace(obj_id, std::move(gpu)).first->second;
   }
 
