@@ -7,7 +7,6 @@
 #include <vector>
 
 #include "bop_json.hpp"
-#include "bop_paths.hpp"
 #include "bop_scene_files.hpp"
 #include "image_size.hpp"
 
@@ -24,7 +23,6 @@ using detail::join;
 using detail::Json;
 using detail::require_object;
 using detail::rgb_file;
-using detail::six_digits;
 using detail::sorted_ids;
 
 namespace {

@@ -11,14 +11,12 @@
 #include <sstream>
 
 #include "bop_json.hpp"
-#include "bop_paths.hpp"
 
 namespace clutterscope::datasets {
 
 namespace fs = std::filesystem;
 using detail::FieldContext;
 using detail::Json;
-using detail::six_digits;
 
 namespace {
 
@@ -55,6 +53,12 @@ std::vector<unsigned char> encode_png(const cv::Mat& image, const fs::path& path
 }
 
 }  // namespace
+
+std::string six_digits(int id) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%06d", id);
+  return text;
+}
 
 void write_file_atomically(const fs::path& path, const std::string& contents) {
   if (path.has_parent_path()) create_folders(path.parent_path());
