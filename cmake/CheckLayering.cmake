@@ -13,7 +13,7 @@ set(CLUTTERSCOPE_LAYERS
   "notebooks_export:"
   "report:batch,notebooks_export"
   "render:datasets"
-  "visibility:datasets,render"
+  "visibility:datasets,render,batch"
   "estimator:"
   "scene_estimation:datasets,render,visibility,estimator,batch,report"
   "simulation:datasets"
