@@ -12,6 +12,7 @@
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/graph_inference.hpp>
+#include <clutterscope/datasets/random_streams.hpp>
 #include <clutterscope/datasets/sensor.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/model_cache.hpp>
@@ -188,8 +189,8 @@ class Simulation {
     options.variance_threshold_cm2 = threshold;
     // Each round observes the scene as it is now, rendered: synthetic by design.
     options.observation = scene_estimation::Observation::kSynthetic;
-    options.seed = batch::item_rng(arguments_.estimate.seed, view_.key,
-                                   "simulate round " + std::to_string(round))();
+    options.seed = datasets::item_rng(arguments_.estimate.seed, view_.key,
+                                      "simulate round " + std::to_string(round))();
 
     context_.make_current();
     const std::vector<render::Instance> instances = render::scene_instances(current, models_);
