@@ -16,7 +16,7 @@ set(CLUTTERSCOPE_LAYERS
   "visibility:datasets,render,batch"
   "estimator:"
   "scene_estimation:datasets,render,visibility,estimator,batch,report"
-  "simulation:datasets"
+  "simulation:datasets,scene_estimation,report"
   "cli:datasets,batch,notebooks_export,report,render,visibility,estimator,scene_estimation,simulation")
 
 # Entries are "library:dependency,dependency".
