@@ -11,7 +11,7 @@ set(CLUTTERSCOPE_LAYERS
   "datasets:"
   "batch:datasets"
   "notebooks_export:"
-  "report:batch,notebooks_export"
+  "report:batch,notebooks_export,estimator"
   "render:datasets"
   "visibility:datasets,render,batch"
   "estimator:"
