@@ -23,12 +23,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string six_digits(int id) {
-  char text[16];
-  std::snprintf(text, sizeof(text), "%06d", id);
-  return text;
-}
-
 std::string host_name() {
   char name[256] = {};
   if (::gethostname(name, sizeof(name) - 1) != 0) return "";
@@ -249,23 +243,49 @@ GenerateSummary generate_dataset(const GenerateOptions& options) {
 
 namespace {
 
-GenerateSummary write_dataset(const GenerateOptions& options,
-                              const std::vector<datasets::CatalogueItem>& catalogue) {
-  const auto start = std::chrono::steady_clock::now();
-
-  // Models: PLY in millimetres with normals, models_info.json, models_names.json.
-  datasets::BopWriter writer(options.out);
+// Models: PLY in millimetres with normals, models_info.json, models_names.json. Returns the
+// meshes (metres) in catalogue order.
+std::vector<render::Mesh> write_models(const GenerateOptions& options,
+                                       const std::vector<datasets::CatalogueItem>& catalogue,
+                                       const datasets::BopWriter& writer) {
   std::vector<datasets::ModelInfo> infos;
   std::vector<render::Mesh> meshes;
   for (const auto& item : catalogue) {
     const datasets::TriangleMesh mesh = datasets::tessellate(item, options.tessellation);
-    const fs::path path = options.out / "models" / ("obj_" + six_digits(item.obj_id) + ".ply");
+    const fs::path path =
+        options.out / "models" / ("obj_" + datasets::six_digits(item.obj_id) + ".ply");
     datasets::create_folders(path.parent_path());
     meshes.push_back(to_render_mesh(mesh));
     render::write_ply(path, meshes.back());
     infos.push_back(datasets::model_info(item, mesh, path));
   }
   writer.write_models_info(infos);
+  return meshes;
+}
+
+// The summary's visibility classes of the non-fixed objects of one view.
+void count_visibility_classes(const datasets::GeneratedScene& scene,
+                              const std::vector<render::InstanceCounts>& counts,
+                              GenerateSummary* summary) {
+  for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+    if (scene.objects[i].fixed) continue;
+    ++summary->objects;
+    if (counts[i].visible_px == 0) {
+      ++summary->hidden;
+    } else if (counts[i].visible_px >= 0.95 * counts[i].silhouette_px) {
+      ++summary->fully_visible;
+    } else {
+      ++summary->partly_visible;
+    }
+  }
+}
+
+GenerateSummary write_dataset(const GenerateOptions& options,
+                              const std::vector<datasets::CatalogueItem>& catalogue) {
+  const auto start = std::chrono::steady_clock::now();
+
+  datasets::BopWriter writer(options.out);
+  const std::vector<render::Mesh> meshes = write_models(options, catalogue, writer);
   datasets::write_file_atomically(options.out / "sensor.json",
                                   datasets::to_json(options.sensor).dump(2) + "\n");
   datasets::write_file_atomically(options.out / "generator.json", options.to_json().dump(2) + "\n");
@@ -335,17 +355,7 @@ GenerateSummary write_dataset(const GenerateOptions& options,
       const render::DepthLabelImage clean = renderer.render(intrinsics, instances);
       const std::vector<render::InstanceCounts> counts =
           renderer.count_visibility(intrinsics, instances);
-      for (std::size_t i = 0; i < scene.objects.size(); ++i) {
-        if (scene.objects[i].fixed) continue;
-        ++summary.objects;
-        if (counts[i].visible_px == 0) {
-          ++summary.hidden;
-        } else if (counts[i].visible_px >= 0.95 * counts[i].silhouette_px) {
-          ++summary.fully_visible;
-        } else {
-          ++summary.partly_visible;
-        }
-      }
+      count_visibility_classes(scene, counts, &summary);
       // The observation (depth, rgb) is rendered from the misfit models; GT, masks and
       // visibility stay with the models written to models/.
       std::mt19937_64 sensor_rng = datasets::derive_rng(options.seed, scene_id, kSensorTask + view);
