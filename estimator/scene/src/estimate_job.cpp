@@ -35,7 +35,6 @@ class EstimateWorker {
   batch::ItemOutput run(const datasets::ImageKey& key) {
     const datasets::SceneView view = dataset_.load(key);
     const ViewEstimate result = estimator_.estimate(view);
-    const double time_ms = 1e3 * result.time_total.count();
     batch::ItemOutput output;
     std::string rows, bop_rows, beliefs;
     nlohmann::json objects = nlohmann::json::array();
@@ -51,80 +50,10 @@ class EstimateWorker {
       if (ok && job_.estimate.confidence_radius_cm) {
         confident_radius = confident_at_radius(object, *job_.estimate.confidence_radius_cm);
       }
-      batch::CsvRow row;
-      row.add(key.split).add(key.scene_id).add(key.im_id).add(object.gt_id).add(object.obj_id);
-      row.add(object.label);
-      if (ok) {
-        for (int a = 0; a < 3; ++a) row.add(1e3 * object.position[a], 3);
-        // Significant digits, not fixed decimals: a variance of 1e-7 cm^2 must not read as 0,
-        // whose log the report cannot take.
-        for (int a = 0; a < 3; ++a) row.add(batch::format_general(1e4 * object.variance[a], 6));
-        row.add(object.confident ? "1" : "0");
-        row.add(100 * *object.error_m, 4).add(100 * *object.initial_error_m, 4);
-        for (int a = 0; a < 3; ++a) row.add(100 * (*object.error_support_m)[a], 4);
-        row.add(batch::format_general(*object.nees, 6));  // empty when not finite (a zero variance)
-        row.add(batch::format_general(estimator::radius95_cm(1e4 * object.variance.maxCoeff()), 6));
-        row.add(!confident_radius ? "" : *confident_radius ? "1" : "0");
-        row.add(object.effective_sample_size, 2);
-        if (object.seen_through) {
-          row.add(*object.seen_through, 4);
-        } else {
-          row.add("");
-        }
-        row.add(object.belief_shift ? batch::format_general(*object.belief_shift, 6) : "");
-        row.add(object.consistent ? "1" : "0");
-      } else {
-        for (int column = 0; column < 19; ++column) row.add("");  // x_mm .. consistent
-      }
-      if (job_.no_time) {
-        row.add("");
-      } else {
-        row.add(time_ms, 1);
-      }
-      rows += row.str();
-      nlohmann::json entry = {{"gt_id", object.gt_id}, {"obj_id", object.obj_id}};
-      entry["visibility"] =
-          object.visibility ? batch::json_rounded(*object.visibility, 4) : nullptr;
-      if (ok) {
-        entry["confident"] = object.confident;
-        entry["err_cm"] = batch::json_rounded(100 * *object.error_m, 4);
-        entry["max_var_cm2"] = batch::json_rounded(1e4 * object.variance.maxCoeff(), 6);
-        // Calibration (summary.json): a non-finite NEES (a zero variance) is left out.
-        if (estimator::usable_nees(object.nees)) entry["nees"] = *object.nees;
-        entry["ess_min"] = object.effective_sample_size;
-        if (confident_radius) entry["confident_radius"] = *confident_radius;
-        const double threshold = job_.estimate.variance_threshold_cm2;
-        const double score = std::exp(-1e4 * object.variance.maxCoeff() / threshold);
-        batch::CsvRow bop;
-        bop.add(key.scene_id).add(key.im_id).add(object.obj_id).add(score, 6);
-        std::string rotation, translation;
-        for (int r = 0; r < 3; ++r)
-          for (int c = 0; c < 3; ++c)
-            rotation +=
-                (rotation.empty() ? "" : " ") + batch::format_general(object.rotation(r, c), 9);
-        for (int a = 0; a < 3; ++a)
-          translation += (translation.empty() ? "" : " ") +
-                         batch::format_general(1e3 * object.model_translation[a], 9);
-        bop.add(rotation).add(translation);
-        if (job_.no_time) {
-          bop.add("-1");
-        } else {
-          bop.add(result.time_total.count(), 4);
-        }
-        bop_rows += bop.str();
-      } else {
-        entry["failure"] = object.failure;
-      }
-      objects.push_back(entry);
-      for (std::size_t iteration = 0; iteration < object.beliefs.size(); ++iteration) {
-        for (const BeliefSample& sample : object.beliefs[iteration]) {
-          batch::CsvRow belief;
-          belief.add(object.gt_id).add(object.obj_id).add(static_cast<int>(iteration + 1));
-          for (int a = 0; a < 3; ++a) belief.add(1e3 * sample.position[a], 3);
-          belief.add(sample.weight, 8);
-          beliefs += belief.str();
-        }
-      }
+      rows += estimate_row(key, object, confident_radius, result);
+      if (ok) bop_rows += bop_row(key, object, result);
+      objects.push_back(summary_entry(object, confident_radius));
+      beliefs += belief_rows(object);
     }
     output.tables = {rows, bop_rows};
     output.summary = {{"objects", objects},
@@ -146,6 +75,100 @@ class EstimateWorker {
   }
 
  private:
+  // The object's estimates.csv row.
+  std::string estimate_row(const datasets::ImageKey& key, const ObjectEstimate& object,
+                           const std::optional<bool>& confident_radius,
+                           const ViewEstimate& result) const {
+    batch::CsvRow row;
+    row.add(key.split).add(key.scene_id).add(key.im_id).add(object.gt_id).add(object.obj_id);
+    row.add(object.label);
+    if (object.failure.empty()) {
+      for (int a = 0; a < 3; ++a) row.add(1e3 * object.position[a], 3);
+      // Significant digits, not fixed decimals: a variance of 1e-7 cm^2 must not read as 0,
+      // whose log the report cannot take.
+      for (int a = 0; a < 3; ++a) row.add(batch::format_general(1e4 * object.variance[a], 6));
+      row.add(object.confident ? "1" : "0");
+      row.add(100 * *object.error_m, 4).add(100 * *object.initial_error_m, 4);
+      for (int a = 0; a < 3; ++a) row.add(100 * (*object.error_support_m)[a], 4);
+      row.add(batch::format_general(*object.nees, 6));  // empty when not finite (a zero variance)
+      row.add(batch::format_general(estimator::radius95_cm(1e4 * object.variance.maxCoeff()), 6));
+      row.add(!confident_radius ? "" : *confident_radius ? "1" : "0");
+      row.add(object.effective_sample_size, 2);
+      if (object.seen_through) {
+        row.add(*object.seen_through, 4);
+      } else {
+        row.add("");
+      }
+      row.add(object.belief_shift ? batch::format_general(*object.belief_shift, 6) : "");
+      row.add(object.consistent ? "1" : "0");
+    } else {
+      for (int column = 0; column < 19; ++column) row.add("");  // x_mm .. consistent
+    }
+    if (job_.no_time) {
+      row.add("");
+    } else {
+      row.add(1e3 * result.time_total.count(), 1);
+    }
+    return row.str();
+  }
+
+  // The results_bop.csv row of an estimated object (BOP 6D results: score, R, t in mm, time).
+  std::string bop_row(const datasets::ImageKey& key, const ObjectEstimate& object,
+                      const ViewEstimate& result) const {
+    const double threshold = job_.estimate.variance_threshold_cm2;
+    const double score = std::exp(-1e4 * object.variance.maxCoeff() / threshold);
+    batch::CsvRow bop;
+    bop.add(key.scene_id).add(key.im_id).add(object.obj_id).add(score, 6);
+    std::string rotation, translation;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        rotation += (rotation.empty() ? "" : " ") + batch::format_general(object.rotation(r, c), 9);
+    for (int a = 0; a < 3; ++a)
+      translation += (translation.empty() ? "" : " ") +
+                     batch::format_general(1e3 * object.model_translation[a], 9);
+    bop.add(rotation).add(translation);
+    if (job_.no_time) {
+      bop.add("-1");
+    } else {
+      bop.add(result.time_total.count(), 4);
+    }
+    return bop.str();
+  }
+
+  // The object's entry of the per-item summary (what EstimateSummary reads).
+  static nlohmann::json summary_entry(const ObjectEstimate& object,
+                                      const std::optional<bool>& confident_radius) {
+    nlohmann::json entry = {{"gt_id", object.gt_id}, {"obj_id", object.obj_id}};
+    entry["visibility"] = object.visibility ? batch::json_rounded(*object.visibility, 4) : nullptr;
+    if (!object.failure.empty()) {
+      entry["failure"] = object.failure;
+      return entry;
+    }
+    entry["confident"] = object.confident;
+    entry["err_cm"] = batch::json_rounded(100 * *object.error_m, 4);
+    entry["max_var_cm2"] = batch::json_rounded(1e4 * object.variance.maxCoeff(), 6);
+    // Calibration (summary.json): a non-finite NEES (a zero variance) is left out.
+    if (estimator::usable_nees(object.nees)) entry["nees"] = *object.nees;
+    entry["ess_min"] = object.effective_sample_size;
+    if (confident_radius) entry["confident_radius"] = *confident_radius;
+    return entry;
+  }
+
+  // The object's belief samples of every iteration (with --save-beliefs), camera frame, mm.
+  static std::string belief_rows(const ObjectEstimate& object) {
+    std::string beliefs;
+    for (std::size_t iteration = 0; iteration < object.beliefs.size(); ++iteration) {
+      for (const BeliefSample& sample : object.beliefs[iteration]) {
+        batch::CsvRow belief;
+        belief.add(object.gt_id).add(object.obj_id).add(static_cast<int>(iteration + 1));
+        for (int a = 0; a < 3; ++a) belief.add(1e3 * sample.position[a], 3);
+        belief.add(sample.weight, 8);
+        beliefs += belief.str();
+      }
+    }
+    return beliefs;
+  }
+
   const EstimateJobOptions& job_;
   const datasets::BopDataset& dataset_;
   SceneEstimator estimator_;

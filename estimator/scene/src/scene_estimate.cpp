@@ -9,6 +9,7 @@
 #include <clutterscope/datasets/sensor.hpp>
 #include <clutterscope/estimator/confidence.hpp>
 #include <clutterscope/scene_estimation/scene_estimate.hpp>
+#include <clutterscope/scene_estimation/synthetic_view.hpp>
 #include <clutterscope/visibility/image_visibility.hpp>
 #include <cmath>
 #include <cstdio>
@@ -220,7 +221,6 @@ SceneFrame frame_scene(SceneEstimator::State& s, const datasets::SceneView& view
 ObservedView observe(SceneEstimator::State& s, const datasets::SceneView& view,
                      const SceneFrame& frame, ViewEstimate* result) {
   const EstimateOptions& options = s.options;
-  const int n = static_cast<int>(view.objects.size());
   ObservedView observed;
   // The measured depth (checked against the GT render for a wrong depth_scale), or the GT
   // depth through the sensor model when synthetic ones are asked for.
@@ -253,19 +253,14 @@ ObservedView observe(SceneEstimator::State& s, const datasets::SceneView& view,
       datasets::check_depth_scale(observed.depth, clean.depth, scaled.camera.depth_scale,
                                   options.depth, view.depth_path, where);
     } else {
-      // The observation from misfit models (GT, labels and visibility keep the models), with
-      // this camera's depth-to-colour offset; both drawn per image.
-      render::DepthLabelImage misfit_render;
+      // The observation from misfit models, with this camera's depth-to-colour offset; both
+      // drawn per image.
+      std::vector<Eigen::Isometry3d> misfits;
       if (options.sensor.has_misfit()) {
         std::mt19937_64 misfit_rng = datasets::item_rng(options.seed, view.key, "model misfit");
-        std::vector<render::Instance> seen_instances = render::scene_instances(view, s.models);
-        for (render::Instance& instance : seen_instances) {
-          instance.model_to_camera =
-              instance.model_to_camera * datasets::draw_model_misfit(options.sensor, misfit_rng);
-        }
-        misfit_render = s.renderer.render(image, seen_instances);
+        for (std::size_t i = 0; i < view.objects.size(); ++i)
+          misfits.push_back(datasets::draw_model_misfit(options.sensor, misfit_rng));
       }
-      const render::DepthLabelImage& seen = options.sensor.has_misfit() ? misfit_render : clean;
       std::vector<int> label_obj_ids = {0};
       for (const datasets::GtInstance& object : view.objects)
         label_obj_ids.push_back(object.obj_id);
@@ -274,8 +269,10 @@ ObservedView observe(SceneEstimator::State& s, const datasets::SceneView& view,
       const Eigen::Vector2d registration =
           datasets::draw_registration_offset(options.sensor, registration_rng);
       std::mt19937_64 sensor_rng = datasets::item_rng(options.seed, view.key, "sensor");
-      observed.depth = datasets::apply_sensor(seen.depth, seen.labels, label_obj_ids, view.camera,
-                                              options.sensor, registration, sensor_rng);
+      observed.depth =
+          sense_view(s.renderer, image, view.camera, render::scene_instances(view, s.models),
+                     label_obj_ids, clean, misfits, options.sensor, registration, sensor_rng)
+              .depth_m;
     }
   }
   // Visibility of each GT instance (evaluation, and the synthetic detector's silhouettes).
@@ -287,12 +284,10 @@ ObservedView observe(SceneEstimator::State& s, const datasets::SceneView& view,
     // Silhouette sizes only where the amodal test needs them (they also make the scores fall
     // with visibility, as generate's do; without, every score is that of full visibility).
     const bool by_visibility = options.detector.amodal_below_visibility > 0;
-    std::vector<datasets::DetectorInstance> instances;
-    for (int i = 0; i < n; ++i) {
-      const render::InstanceCounts& count = observed.counts[static_cast<std::size_t>(i)];
-      instances.push_back({view.objects[i].obj_id, by_visibility ? count.silhouette_px : 0,
-                           frame.is_fixed[static_cast<std::size_t>(i)], count.silhouette_bbox});
-    }
+    std::vector<int> obj_ids;
+    for (const datasets::GtInstance& object : view.objects) obj_ids.push_back(object.obj_id);
+    const std::vector<datasets::DetectorInstance> instances =
+        detector_instances(obj_ids, frame.is_fixed, observed.counts, by_visibility);
     std::vector<int> category_ids;
     for (const auto& model : s.dataset.models()) category_ids.push_back(model.obj_id);
     std::mt19937_64 detector_rng = datasets::item_rng(options.seed, view.key, "detector");

@@ -12,6 +12,7 @@
 #include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/renderer.hpp>
+#include <clutterscope/scene_estimation/synthetic_view.hpp>
 #include <map>
 #include <memory>
 
@@ -63,7 +64,8 @@ void run_detect(const DetectArguments& arguments) {
         view.graph ? view.graph->fixed
                    : datasets::fixed_instances(view, dataset.models(), graph_options);
     std::vector<render::Instance> instances;
-    std::vector<datasets::DetectorInstance> detector_instances;
+    std::vector<int> obj_ids;
+    std::vector<bool> is_fixed;
     for (std::size_t i = 0; i < view.objects.size(); ++i) {
       const int obj_id = view.objects[i].obj_id;
       auto found = meshes.find(obj_id);
@@ -75,23 +77,19 @@ void run_detect(const DetectArguments& arguments) {
       }
       instances.push_back({found->second.get(), view.objects[i].model_to_camera,
                            static_cast<std::uint32_t>(i + 1)});
-      const bool is_fixed =
-          std::find(fixed.begin(), fixed.end(), static_cast<int>(i)) != fixed.end();
-      detector_instances.push_back({obj_id, 0, is_fixed, {}});
+      obj_ids.push_back(obj_id);
+      is_fixed.push_back(std::find(fixed.begin(), fixed.end(), static_cast<int>(i)) != fixed.end());
     }
     const render::Intrinsics intrinsics = render::Intrinsics::from_camera(view.camera);
     const render::DepthLabelImage rendered = renderer.render(intrinsics, instances);
     const auto counts = renderer.count_visibility(intrinsics, instances);
-    for (std::size_t i = 0; i < counts.size(); ++i) {
-      detector_instances[i].silhouette_px = counts[i].silhouette_px;
-      detector_instances[i].silhouette_bbox = counts[i].silhouette_bbox;
-    }
     // The generator's detector stream for this image: the same seed gives the same boxes.
     std::mt19937_64 rng =
         datasets::derive_rng(arguments.seed, key.scene_id, kDetectorTask + key.im_id);
     writer.add(key.scene_id, key.im_id,
-               datasets::detect(rendered.labels, detector_instances, category_ids,
-                                arguments.detector, rng));
+               datasets::detect(rendered.labels,
+                                scene_estimation::detector_instances(obj_ids, is_fixed, counts),
+                                category_ids, arguments.detector, rng));
     progress.item_done();
   }
   writer.finish();

@@ -15,6 +15,7 @@
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/model_cache.hpp>
 #include <clutterscope/render/renderer.hpp>
+#include <clutterscope/scene_estimation/synthetic_view.hpp>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -119,18 +120,16 @@ int run_sensor_fit(const SensorFitArguments& arguments) {
     std::mt19937_64 rng =
         datasets::derive_rng(arguments.seed, static_cast<std::uint64_t>(key.scene_id),
                              static_cast<std::uint64_t>(key.im_id));
-    std::vector<render::Instance> observed = instances;
-    for (render::Instance& instance : observed) {
-      instance.model_to_camera =
-          instance.model_to_camera * datasets::draw_model_misfit(sensor, rng);
-    }
-    const render::DepthLabelImage seen = renderer.render(intrinsics, observed);
-    const cv::Mat clean = datasets::with_background(seen.depth, seen.labels, depth);
+    std::vector<Eigen::Isometry3d> misfits;
+    for (std::size_t i = 0; i < instances.size(); ++i)
+      misfits.push_back(datasets::draw_model_misfit(sensor, rng));
     std::vector<int> label_obj_ids = {0};
     for (const datasets::GtInstance& object : view.objects) label_obj_ids.push_back(object.obj_id);
     const Eigen::Vector2d registration = datasets::draw_registration_offset(sensor, rng);
-    const cv::Mat synthetic = datasets::apply_sensor(clean, seen.labels, label_obj_ids, view.camera,
-                                                     sensor, registration, rng);
+    const cv::Mat synthetic =
+        scene_estimation::sense_view(renderer, intrinsics, view.camera, instances, label_obj_ids,
+                                     gt, misfits, sensor, registration, rng, depth)
+            .depth_m;
     simulated.add(synthetic, gt.depth, scene, gt.labels);
     progress.item_done();
   }

@@ -12,6 +12,7 @@
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/files.hpp>
 #include <clutterscope/render/context.hpp>
+#include <clutterscope/scene_estimation/synthetic_view.hpp>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -21,12 +22,6 @@ namespace clutterscope::cli {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string six_digits(int id) {
-  char text[16];
-  std::snprintf(text, sizeof(text), "%06d", id);
-  return text;
-}
 
 std::string host_name() {
   char name[256] = {};
@@ -240,23 +235,49 @@ GenerateSummary generate_dataset(const GenerateOptions& options) {
 
 namespace {
 
-GenerateSummary write_dataset(const GenerateOptions& options,
-                              const std::vector<datasets::CatalogueItem>& catalogue) {
-  const auto start = std::chrono::steady_clock::now();
-
-  // Models: PLY in millimetres with normals, models_info.json, models_names.json.
-  datasets::BopWriter writer(options.out);
+// Models: PLY in millimetres with normals, models_info.json, models_names.json. Returns the
+// meshes (metres) in catalogue order.
+std::vector<datasets::Mesh> write_models(const GenerateOptions& options,
+                                         const std::vector<datasets::CatalogueItem>& catalogue,
+                                         const datasets::BopWriter& writer) {
   std::vector<datasets::ModelInfo> infos;
   std::vector<datasets::Mesh> meshes;
   for (const auto& item : catalogue) {
     const datasets::BasicMesh<double> mesh = datasets::tessellate(item, options.tessellation);
-    const fs::path path = options.out / "models" / ("obj_" + six_digits(item.obj_id) + ".ply");
+    const fs::path path =
+        options.out / "models" / ("obj_" + datasets::six_digits(item.obj_id) + ".ply");
     datasets::create_folders(path.parent_path());
     meshes.push_back(mesh.cast<float>());
     datasets::write_ply(path, meshes.back());
     infos.push_back(datasets::model_info(item, mesh, path));
   }
   writer.write_models_info(infos);
+  return meshes;
+}
+
+// The summary's visibility classes of the non-fixed objects of one view.
+void count_visibility_classes(const datasets::GeneratedScene& scene,
+                              const std::vector<render::InstanceCounts>& counts,
+                              GenerateSummary* summary) {
+  for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+    if (scene.objects[i].fixed) continue;
+    ++summary->objects;
+    if (counts[i].visible_px == 0) {
+      ++summary->hidden;
+    } else if (counts[i].visible_px >= 0.95 * counts[i].silhouette_px) {
+      ++summary->fully_visible;
+    } else {
+      ++summary->partly_visible;
+    }
+  }
+}
+
+GenerateSummary write_dataset(const GenerateOptions& options,
+                              const std::vector<datasets::CatalogueItem>& catalogue) {
+  const auto start = std::chrono::steady_clock::now();
+
+  datasets::BopWriter writer(options.out);
+  const std::vector<datasets::Mesh> meshes = write_models(options, catalogue, writer);
   datasets::write_file_atomically(options.out / "sensor.json",
                                   datasets::to_json(options.sensor).dump(2) + "\n");
   datasets::write_file_atomically(options.out / "generator.json", options.to_json().dump(2) + "\n");
@@ -289,7 +310,8 @@ GenerateSummary write_dataset(const GenerateOptions& options,
     }
     std::vector<std::array<std::uint8_t, 3>> label_colours = {{0, 0, 0}};
     std::vector<int> label_obj_ids = {0};
-    std::vector<datasets::DetectorInstance> detector_instances;
+    std::vector<int> obj_ids;
+    std::vector<bool> fixed;
     // Per scene (one camera, one set of physical objects): the depth-to-colour offset and
     // each object's model misfit, model frame -> the observed object's frame.
     std::mt19937_64 registration_rng =
@@ -302,7 +324,8 @@ GenerateSummary write_dataset(const GenerateOptions& options,
       label_colours.push_back(catalogue[object.item].colour);
       label_obj_ids.push_back(object.obj_id);
       misfits.push_back(datasets::draw_model_misfit(options.sensor, misfit_rng));
-      detector_instances.push_back({object.obj_id, 0, object.fixed, {}});
+      obj_ids.push_back(object.obj_id);
+      fixed.push_back(object.fixed);
       summary.deepest_stack = std::max(summary.deepest_stack, object.level);
     }
     std::vector<datasets::BopWriter::ImageData> images;
@@ -324,41 +347,25 @@ GenerateSummary write_dataset(const GenerateOptions& options,
       const render::DepthLabelImage clean = renderer.render(intrinsics, instances);
       const std::vector<render::InstanceCounts> counts =
           renderer.count_visibility(intrinsics, instances);
-      for (std::size_t i = 0; i < scene.objects.size(); ++i) {
-        detector_instances[i].silhouette_px = counts[i].silhouette_px;
-        detector_instances[i].silhouette_bbox = counts[i].silhouette_bbox;
-        if (scene.objects[i].fixed) continue;
-        ++summary.objects;
-        if (counts[i].visible_px == 0) {
-          ++summary.hidden;
-        } else if (counts[i].visible_px >= 0.95 * counts[i].silhouette_px) {
-          ++summary.fully_visible;
-        } else {
-          ++summary.partly_visible;
-        }
-      }
+      count_visibility_classes(scene, counts, &summary);
       // The observation (depth, rgb) is rendered from the misfit models; GT, masks and
       // visibility stay with the models written to models/.
-      render::DepthLabelImage misfit_render;
-      if (options.sensor.has_misfit()) {
-        std::vector<render::Instance> observed = instances;
-        for (std::size_t i = 0; i < observed.size(); ++i) {
-          observed[i].model_to_camera = observed[i].model_to_camera * misfits[i];
-        }
-        misfit_render = renderer.render(intrinsics, observed);
-      }
-      const render::DepthLabelImage& seen = options.sensor.has_misfit() ? misfit_render : clean;
       std::mt19937_64 sensor_rng = datasets::derive_rng(options.seed, scene_id, kSensorTask + view);
-      image.depth_m = datasets::apply_sensor(seen.depth, seen.labels, label_obj_ids, camera,
-                                             options.sensor, registration, sensor_rng);
+      const scene_estimation::SensedView sensed = scene_estimation::sense_view(
+          renderer, intrinsics, camera, instances, label_obj_ids, clean,
+          options.sensor.has_misfit() ? misfits : std::vector<Eigen::Isometry3d>{}, options.sensor,
+          registration, sensor_rng);
+      image.depth_m = sensed.depth_m;
       if (options.rgb) {
-        image.rgb = datasets::shade_labels(seen.depth, seen.labels, camera, label_colours);
+        image.rgb =
+            datasets::shade_labels(sensed.seen.depth, sensed.seen.labels, camera, label_colours);
       }
       std::mt19937_64 detector_rng =
           datasets::derive_rng(options.seed, scene_id, kDetectorTask + view);
       detections.add(scene_id, view,
-                     datasets::detect(clean.labels, detector_instances, category_ids,
-                                      options.detector, detector_rng));
+                     datasets::detect(clean.labels,
+                                      scene_estimation::detector_instances(obj_ids, fixed, counts),
+                                      category_ids, options.detector, detector_rng));
       images.push_back(std::move(image));
       ++summary.images;
     }
