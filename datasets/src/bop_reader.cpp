@@ -10,7 +10,6 @@
 #include <set>
 
 #include "bop_json.hpp"
-#include "bop_paths.hpp"
 #include "image_size.hpp"
 
 namespace clutterscope::datasets {
@@ -18,7 +17,6 @@ namespace clutterscope::datasets {
 namespace fs = std::filesystem;
 using detail::FieldContext;
 using detail::Json;
-using detail::six_digits;
 
 namespace {
 

@@ -11,14 +11,12 @@
 #include <sstream>
 
 #include "bop_json.hpp"
-#include "bop_paths.hpp"
 
 namespace clutterscope::datasets {
 
 namespace fs = std::filesystem;
 using detail::FieldContext;
 using detail::Json;
-using detail::six_digits;
 
 namespace {
 

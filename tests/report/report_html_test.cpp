@@ -11,8 +11,8 @@
 namespace clutterscope::report {
 namespace {
 
-const std::filesystem::path kSchema =
-    std::filesystem::path(CLUTTERSCOPE_SOURCE_DIR) / "tools" / "report_summary.schema.json";
+const std::filesystem::path kSchema = std::filesystem::path(CLUTTERSCOPE_SOURCE_DIR) / "tools" /
+                                      "report" / "report_summary.schema.json";
 
 // Validates a JSON file against the report schema with Python's jsonschema (Draft 2020-12).
 // Returns 0 when valid; the validator's message is left in <summary>.validation.txt.

@@ -5,7 +5,6 @@
 #include <clutterscope/batch/storage.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/files.hpp>
-#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -20,39 +19,22 @@ constexpr int kFormatVersion = 1;
 constexpr std::size_t kMissingExamples = 5;
 constexpr const char* kDigestKey = "digest";
 
-std::string six_digits(int id) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%06d", id);
-  return buffer;
-}
-
 std::string key_name(const ImageKey& key) {
-  return key.split + "/" + six_digits(key.scene_id) + "/" + six_digits(key.im_id);
+  return key.split + "/" + datasets::six_digits(key.scene_id) + "/" +
+         datasets::six_digits(key.im_id);
 }
 
 fs::path batch_dir(const fs::path& root) { return root / ".batch"; }
 fs::path job_path(const fs::path& root) { return batch_dir(root) / "job.json"; }
 fs::path items_path(const fs::path& root) { return batch_dir(root) / "items.tsv"; }
 
-std::string read_text(const fs::path& path) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw datasets::DatasetError(path, "cannot read file");
-  std::ostringstream contents;
-  contents << file.rdbuf();
-  return contents.str();
-}
-
+// Parts and manifests are the runner's own files: one that does not parse is recomputed.
 nlohmann::json read_json(const fs::path& path) {
-  try {
-    return nlohmann::json::parse(read_text(path));
-  } catch (const nlohmann::json::exception& error) {
-    throw datasets::DatasetError(path, std::string("malformed JSON (") + error.what() +
-                                           "); delete this file to recompute it");
-  }
+  return datasets::read_json(path, "delete this file to recompute it");
 }
 
 void copy_file_atomically(const fs::path& from, const fs::path& to) {
-  write_text_atomically(to, read_text(from));
+  write_text_atomically(to, datasets::read_file(from));
 }
 
 std::string items_text(const std::vector<ImageKey>& items) {
@@ -66,12 +48,6 @@ std::string items_text(const std::vector<ImageKey>& items) {
         key.split + "\t" + std::to_string(key.scene_id) + "\t" + std::to_string(key.im_id) + "\n";
   }
   return text;
-}
-
-std::string hex64(std::uint64_t value) {
-  char buffer[17];
-  std::snprintf(buffer, sizeof(buffer), "%016llx", static_cast<unsigned long long>(value));
-  return buffer;
 }
 
 // A readable account of the first difference between two fingerprints.
@@ -150,8 +126,8 @@ std::uint64_t fnv1a64(std::string_view text) {
 }
 
 fs::path part_path(const fs::path& out_dir, const ImageKey& key, PartKind kind) {
-  return batch_dir(out_dir) / "parts" / key.split / six_digits(key.scene_id) /
-         (six_digits(key.im_id) + (kind == PartKind::kOk ? ".json" : ".failed.json"));
+  return batch_dir(out_dir) / "parts" / key.split / datasets::six_digits(key.scene_id) /
+         (datasets::six_digits(key.im_id) + (kind == PartKind::kOk ? ".json" : ".failed.json"));
 }
 
 void write_ok_part(const fs::path& out_dir, const ImageKey& key, const ItemOutput& output,
@@ -160,7 +136,7 @@ void write_ok_part(const fs::path& out_dir, const ImageKey& key, const ItemOutpu
   nlohmann::json part = {
       {"tables", output.tables}, {"summary", output.summary}, {"files", output.files}};
   // "digest" sorts before the other keys, so read_part_digest reads only the file's start.
-  if (input_digest) part[kDigestKey] = hex64(*input_digest);
+  if (input_digest) part[kDigestKey] = format_hex64(*input_digest);
   write_text_atomically(path, part.dump() + "\n");
   std::error_code ignored;
   fs::remove(part_path(out_dir, key, PartKind::kFailed), ignored);
@@ -202,7 +178,7 @@ BatchFolder BatchFolder::prepare(const fs::path& out_dir, const std::string& com
   nlohmann::json fingerprint = {
       {"command", command},
       {"tool_version", CLUTTERSCOPE_VERSION},
-      {"items", {{"count", items.size()}, {"fnv1a64", hex64(fnv1a64(items_tsv))}}},
+      {"items", {{"count", items.size()}, {"fnv1a64", format_hex64(fnv1a64(items_tsv))}}},
       {"options", options}};
   if (fs::exists(job_path(out_dir))) {
     BatchFolder existing = open(out_dir);

@@ -9,6 +9,7 @@
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/input_digest.hpp>
+#include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/cli/dataset_options.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
@@ -40,12 +41,6 @@ using visibility::BopGtInfo;
 using visibility::python_float_repr;
 
 namespace {
-
-constexpr const char* kObjectsHeader =
-    "split,scene_id,im_id,gt_id,obj_id,label,px_count_all,px_count_valid,px_count_visib,"
-    "visib_fract,bbox_obj_x,bbox_obj_y,bbox_obj_w,bbox_obj_h,bbox_visib_x,bbox_visib_y,"
-    "bbox_visib_w,bbox_visib_h";
-constexpr const char* kImagesHeader = "split,scene_id,im_id,n_objects,scene_visibility";
 
 struct VisibilityArguments {
   DatasetOptions dataset;
@@ -466,7 +461,7 @@ class VisibilitySummary : public batch::SummaryBuilder {
 batch::BatchOutputSpec visibility_output_spec() {
   batch::BatchOutputSpec spec;
   spec.command = "visibility";
-  spec.tables = {{"objects.csv", kObjectsHeader}, {"images.csv", kImagesHeader}};
+  spec.tables = {batch::visibility_objects_table().spec(), batch::visibility_images_table().spec()};
   spec.make_summary = [](const nlohmann::json& fingerprint, const fs::path& out_dir) {
     return std::make_unique<VisibilitySummary>(fingerprint, out_dir);
   };

@@ -4,21 +4,21 @@
 #include <algorithm>
 #include <chrono>
 #include <clutterscope/batch/batch.hpp>
+#include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/output_folder.hpp>
+#include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/files.hpp>
 #include <clutterscope/notebooks_export/notebook.hpp>
 #include <clutterscope/report/beliefs.hpp>
 #include <clutterscope/report/report.hpp>
 #include <clutterscope/report/tables.hpp>
 #include <cmath>
-#include <cstdio>
-#include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
-#include <sstream>
 #include <stdexcept>
 #include <tuple>
 #include <utility>
@@ -49,28 +49,12 @@ bool has_step_results(const fs::path& dir) {
   return false;
 }
 
-std::string read_text(const fs::path& path) {
-  std::ifstream stream(path, std::ios::binary);
-  if (!stream) throw datasets::DatasetError(path, "cannot be read");
-  std::ostringstream text;
-  text << stream.rdbuf();
-  return text.str();
-}
-
-nlohmann::json read_json(const fs::path& path) {
-  try {
-    return nlohmann::json::parse(read_text(path));
-  } catch (const nlohmann::json::exception& error) {
-    throw datasets::DatasetError(path, std::string("is not valid JSON: ") + error.what());
-  }
-}
-
 // "15", "15.0" and "1.5e1" are one number: they select the same job.
 std::string canonical_value(const std::string& value) {
   try {
     std::size_t used = 0;
     const double number = std::stod(value, &used);
-    if (used == value.size()) return report::format_number(number);
+    if (used == value.size()) return batch::format_shortest(number);
   } catch (const std::exception&) {
     // not a number: kept as typed
   }
@@ -104,7 +88,7 @@ int parse_step(const std::vector<std::string>& command_line, bool dry_run) {
 }
 
 StepRun read_step_run(const fs::path& step_dir, const std::string& command) {
-  const nlohmann::json run = read_json(step_dir / "run.json");
+  const nlohmann::json run = datasets::read_json(step_dir / "run.json");
   StepRun step;
   step.command = command;
   step.computed = run.at("computed").get<std::size_t>();
@@ -140,14 +124,14 @@ nlohmann::ordered_json run_record(const ReportArguments& arguments, const fs::pa
   run["dataset"] = dataset_fingerprint(arguments.dataset);
   nlohmann::ordered_json failures;
   for (const char* step : {"visibility", "estimate"}) {
-    const nlohmann::json summary = read_json(dir / step / "summary.json");
+    const nlohmann::json summary = datasets::read_json(dir / step / "summary.json");
     run[std::string(step) + "_options"] = summary.at("options");
     // Images that failed under --keep-going are missing from the report: list them.
     failures[step] = summary.at("counts").at("failures");
   }
   run["failed_images"] = failures;
   // The checks on the GT both steps read (rotations off orthonormal), as visibility counted.
-  run["input_checks"] = read_json(dir / "visibility" / "summary.json").at("input_checks");
+  run["input_checks"] = datasets::read_json(dir / "visibility" / "summary.json").at("input_checks");
   const report::ReportOptions& analysis = arguments.analysis;
   run["analysis"] = {{"accurate_cm", analysis.accurate_cm},
                      {"variance_threshold_cm2", analysis.variance_threshold_cm2},
@@ -198,18 +182,12 @@ void append_estimate_options(const ReportArguments& arguments, std::vector<std::
     if (!value.empty()) line->push_back(value);
   }
   line->insert(line->end(), {"--variance-threshold-cm2",
-                             report::format_number(arguments.analysis.variance_threshold_cm2),
+                             batch::format_shortest(arguments.analysis.variance_threshold_cm2),
                              "--seed", std::to_string(arguments.analysis.seed)});
   if (arguments.analysis.confidence_radius_cm) {
     line->insert(line->end(), {"--confidence-radius-cm",
-                               report::format_number(*arguments.analysis.confidence_radius_cm)});
+                               batch::format_shortest(*arguments.analysis.confidence_radius_cm)});
   }
-}
-
-std::string six_digits(int id) {
-  char text[16];
-  std::snprintf(text, sizeof(text), "%06d", id);
-  return text;
 }
 
 // ---- Belief figures ----
@@ -223,12 +201,13 @@ constexpr int kMaxBackgroundWidth = 640;
 // streams make its estimates those of DIR/estimate; its batch runner makes a re-run reuse it.
 fs::path belief_run_dir(const fs::path& dir, const report::ImageSummary& image) {
   return dir / "beliefs" /
-         (image.split + "_" + six_digits(image.scene_id) + "_" + six_digits(image.im_id));
+         (image.split + "_" + datasets::six_digits(image.scene_id) + "_" +
+          datasets::six_digits(image.im_id));
 }
 
 fs::path beliefs_csv(const fs::path& estimate_dir, const report::ImageSummary& image) {
-  return estimate_dir / "beliefs" / image.split / six_digits(image.scene_id) /
-         (six_digits(image.im_id) + ".csv");
+  return estimate_dir / batch::belief_samples_table().file_name / image.split /
+         datasets::six_digits(image.scene_id) / (datasets::six_digits(image.im_id) + ".csv");
 }
 
 // --split-type, --models-dir and --targets where given, for the steps' command lines.
@@ -394,12 +373,12 @@ nlohmann::json report_fingerprint(const ReportArguments& arguments) {
   fingerprint["visibility"] = options_of(arguments.visibility);
   nlohmann::json estimate = options_of(arguments.estimate);
   estimate["--variance-threshold-cm2"] =
-      report::format_number(arguments.analysis.variance_threshold_cm2);
+      batch::format_shortest(arguments.analysis.variance_threshold_cm2);
   estimate["--seed"] = std::to_string(arguments.analysis.seed);
   // Given only: folders of reports without it keep their fingerprint.
   if (arguments.analysis.confidence_radius_cm) {
     estimate["--confidence-radius-cm"] =
-        report::format_number(*arguments.analysis.confidence_radius_cm);
+        batch::format_shortest(*arguments.analysis.confidence_radius_cm);
   }
   fingerprint["estimate"] = estimate;
   return fingerprint;
@@ -409,7 +388,7 @@ void prepare_report_folder(const fs::path& dir, const nlohmann::json& fingerprin
   batch::claim_output_folder(dir, "report");
   const fs::path marker = marker_path(dir);
   if (fs::exists(marker)) {
-    const nlohmann::json stored = read_json(marker);
+    const nlohmann::json stored = datasets::read_json(marker);
     const nlohmann::json patch = nlohmann::json::diff(stored, fingerprint);
     if (patch.empty()) return;
     if (!has_step_results(dir)) {
@@ -456,13 +435,15 @@ ReportRun run_report(const ReportArguments& arguments) {
   }
 
   const fs::path visibility_dir = dir / "visibility";
-  const fs::path estimates_csv = dir / "estimate" / "estimates.csv";
-  std::vector<report::ObjectRow> objects = report::read_objects_csv(visibility_dir / "objects.csv");
+  const fs::path estimates_csv = dir / "estimate" / batch::estimates_table().file_name;
+  std::vector<report::ObjectRow> objects =
+      report::read_objects_csv(visibility_dir / batch::visibility_objects_table().file_name);
   report::join_estimates(
       objects, estimates_of_visible_images(report::read_estimates_csv(estimates_csv), objects),
       estimates_csv);
   const report::ReportAnalysis analysis = report::analyse_report(
-      objects, report::read_images_csv(visibility_dir / "images.csv"), arguments.analysis);
+      objects, report::read_images_csv(visibility_dir / batch::visibility_images_table().file_name),
+      arguments.analysis);
   std::vector<report::NamedPlot> plots = report::standard_plots(objects, analysis);
   BeliefFigures beliefs = belief_figures(arguments, dir, objects, analysis);
   run.exit_code = std::max(run.exit_code, beliefs.exit_code);

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <clutterscope/batch/formats.hpp>
 #include <clutterscope/report/plots.hpp>
 #include <cmath>
 #include <cstdio>
@@ -9,11 +10,7 @@ namespace {
 
 constexpr int kHistogramBins = 20;
 
-std::string format_g(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%g", value);
-  return buffer;
-}
+std::string format_g(double value) { return batch::printf_general(value); }
 
 }  // namespace
 
@@ -69,17 +66,16 @@ std::string threshold_sweep_plot(const ThresholdAnalysis& analysis) {
       "chosen " + format_g(analysis.options.chosen_threshold_cm2) + " cm\u00b2");
   const Statistic& recommended = analysis.recommendation.largest_with_min_precision;
   if (recommended.defined()) {
-    char label[64];
-    std::snprintf(label, sizeof(label), "recommended %.3g cm\u00b2", *recommended.value);
-    chart.add_vertical_line(*recommended.value, svg::category_colour(4), label);
+    chart.add_vertical_line(
+        *recommended.value, svg::category_colour(4),
+        "recommended " + batch::printf_general(*recommended.value, 3) + " cm\u00b2");
   }
   if (analysis.chosen_radius) {
     // The radius decision is the variance threshold R^2 / chi2_3(0.95): the same curves.
-    char label[96];
-    std::snprintf(label, sizeof(label), "radius %g cm (= %.3g cm\u00b2)",
-                  analysis.chosen_radius->radius_cm, analysis.chosen_radius->row.threshold_cm2);
-    chart.add_vertical_line(analysis.chosen_radius->row.threshold_cm2, svg::category_colour(5),
-                            label);
+    chart.add_vertical_line(
+        analysis.chosen_radius->row.threshold_cm2, svg::category_colour(5),
+        "radius " + format_g(analysis.chosen_radius->radius_cm) + " cm (= " +
+            batch::printf_general(analysis.chosen_radius->row.threshold_cm2, 3) + " cm\u00b2)");
   }
   return chart.render();
 }
@@ -134,8 +130,7 @@ std::string image_visibility_plot(const std::string& title,
   std::vector<svg::Bar> bars;
   for (size_t i = 0; i < image_objects.size(); ++i) {
     const ObjectRow& object = image_objects[i];
-    char percent[16];
-    std::snprintf(percent, sizeof(percent), "%.0f%%", 100.0 * object.visib_fract);
+    const std::string percent = batch::printf_fixed(100.0 * object.visib_fract, 0) + "%";
     const bool low = object.visib_fract < visibility_cutoff;
     bars.push_back({object.label + " (gt " + std::to_string(object.gt_id) + ")",
                     100.0 * object.visib_fract, svg::category_colour(static_cast<int>(i)), percent,

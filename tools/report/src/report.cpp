@@ -1,5 +1,7 @@
 #include <algorithm>
 #include <cctype>
+#include <clutterscope/batch/formats.hpp>
+#include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/report/plots.hpp>
@@ -89,34 +91,27 @@ Json threshold_row_json(const ThresholdRow& row) {
 
 std::string html_escape(const std::string& text) { return svg::escape_xml(text); }
 
-std::string fixed(double value, int decimals) {
-  char buffer[48];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, value);
-  return buffer;
-}
+using batch::printf_fixed;
 
-std::string general(double value) {
-  char buffer[48];
-  std::snprintf(buffer, sizeof(buffer), "%.3g", value);
-  return buffer;
-}
+// Thresholds, radii and precisions are shown with three significant digits.
+std::string general(double value) { return batch::printf_general(value, 3); }
 
 std::string cell(const Statistic& statistic, int decimals = 3, bool percent = false) {
   if (!statistic.defined()) {
     return "<td class=\"na\" title=\"" + html_escape(statistic.undefined_reason) + "\">n/a</td>";
   }
   const double value = *statistic.value * (percent ? 100.0 : 1.0);
-  return "<td>" + (decimals < 0 ? general(value) : fixed(value, decimals)) + (percent ? "%" : "") +
-         "</td>";
+  return "<td>" + (decimals < 0 ? general(value) : printf_fixed(value, decimals)) +
+         (percent ? "%" : "") + "</td>";
 }
 
 std::string interval_text(const CorrelationWithInterval& c) {
   if (!c.interval) return "n/a (" + c.interval_undefined_reason + ")";
-  return "[" + fixed(c.interval->low, 3) + ", " + fixed(c.interval->high, 3) + "]";
+  return "[" + printf_fixed(c.interval->low, 3) + ", " + printf_fixed(c.interval->high, 3) + "]";
 }
 
 std::string statistic_text(const Statistic& statistic, int decimals) {
-  return statistic.defined() ? fixed(*statistic.value, decimals)
+  return statistic.defined() ? printf_fixed(*statistic.value, decimals)
                              : "n/a (" + statistic.undefined_reason + ")";
 }
 
@@ -276,14 +271,13 @@ ReportAnalysis analyse_report(const std::vector<ObjectRow>& objects,
 
 std::string format_images_csv(const std::vector<ImageSummary>& images) {
   std::ostringstream out;
-  out << "split,scene_id,im_id,n_objects,scene_visibility,n_estimated,n_confident,"
-         "mean_max_var_cm2\n";
+  out << batch::report_images_table().header() << '\n';
   for (const ImageSummary& image : images) {
     out << image.split << ',' << image.scene_id << ',' << image.im_id << ',' << image.n_objects
-        << ',' << format_number(image.scene_visibility) << ',' << image.n_estimated << ','
+        << ',' << batch::format_shortest(image.scene_visibility) << ',' << image.n_estimated << ','
         << image.n_confident << ','
         << (image.mean_max_variance_cm2.defined()
-                ? format_number(*image.mean_max_variance_cm2.value)
+                ? batch::format_shortest(*image.mean_max_variance_cm2.value)
                 : "")
         << '\n';
   }
@@ -441,12 +435,12 @@ std::string format_console_summary(const ReportAnalysis& analysis) {
       << " confident\n";
   out << "median visibility:     "
       << (analysis.visibility.median.defined()
-              ? fixed(100.0 * *analysis.visibility.median.value, 1) + "%"
+              ? printf_fixed(100.0 * *analysis.visibility.median.value, 1) + "%"
               : "n/a (" + analysis.visibility.median.undefined_reason + ")")
       << "\n";
   out << "variance ~ visibility: Spearman " << statistic_text(rho.estimate, 3) << ", "
-      << fixed(100.0 * options.bootstrap.confidence, 0) << "% interval " << interval_text(rho)
-      << " (n = " << rho.n << ")\n";
+      << printf_fixed(100.0 * options.bootstrap.confidence, 0) << "% interval "
+      << interval_text(rho) << " (n = " << rho.n << ")\n";
   // The undefined reason already says which precision no threshold reached.
   out << "recommended threshold: "
       << (recommended.defined()
@@ -454,11 +448,11 @@ std::string format_console_summary(const ReportAnalysis& analysis) {
                     " cm^2 (largest with precision >= " + general(options.min_precision) + ")"
               : "n/a (" + recommended.undefined_reason + ")")
       << "\n";
-  out << "accepted below " << fixed(100.0 * options.visibility_cutoff, 0)
+  out << "accepted below " << printf_fixed(100.0 * options.visibility_cutoff, 0)
       << "%:    " << chosen.accepted_below_cutoff << " of " << chosen.accepted << " accepted at "
       << general(options.variance_threshold_cm2) << " cm^2 ("
       << (chosen.accepted_below_cutoff_share.defined()
-              ? fixed(100.0 * *chosen.accepted_below_cutoff_share.value, 1) + "%"
+              ? printf_fixed(100.0 * *chosen.accepted_below_cutoff_share.value, 1) + "%"
               : "n/a")
       << ")\n";
   return out.str();
@@ -512,8 +506,9 @@ std::vector<NamedPlot> standard_plots(const std::vector<ObjectRow>& objects,
     }
     plots.push_back({name,
                      "Objects of " + id + " with their visibility (red below " +
-                         fixed(100.0 * options.visibility_cutoff, 0) + "%); scene visibility " +
-                         fixed(100.0 * image->scene_visibility, 1) + "%.",
+                         printf_fixed(100.0 * options.visibility_cutoff, 0) +
+                         "%); scene visibility " +
+                         printf_fixed(100.0 * image->scene_visibility, 1) + "%.",
                      image_visibility_plot("Visibility of the objects in " + id, image_objects,
                                            options.visibility_cutoff)});
   }
@@ -542,7 +537,7 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
 
   // Summary.
   const auto percent = [](int part, int whole) {
-    return whole > 0 ? fixed(100.0 * part / whole, 1) + "%" : std::string("n/a");
+    return whole > 0 ? printf_fixed(100.0 * part / whole, 1) + "%" : std::string("n/a");
   };
   out << "<section id=\"summary\">\n<h2>Summary</h2>\n<table>\n"
       << "<tr><th class=\"text\">objects</th><td>" << c.objects << "</td></tr>\n"
@@ -565,7 +560,8 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
   // Correlations.
   out << "<section id=\"correlations\">\n<h2>Correlation with visibility</h2>\n"
       << "<p>Correlation of each quantity with object visibility V<sub>i</sub>; "
-      << fixed(100.0 * options.bootstrap.confidence, 0) << "% bootstrap percentile intervals "
+      << printf_fixed(100.0 * options.bootstrap.confidence, 0)
+      << "% bootstrap percentile intervals "
       << "(resamples per interval in the last column). A negative value means the "
       << "quantity grows as visibility drops.</p>\n<table>\n<tr><th class=\"text\">quantity</th>"
       << "<th "
@@ -595,8 +591,8 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
       << "<th>mean variance (cm&sup2;)</th><th>median error (cm)</th><th>confident</th>"
       << "<th>confident off by &gt; " << general(options.accurate_cm) << " cm</th></tr>\n";
   for (const VisibilityBand& band : analysis.bands) {
-    out << "<tr><td>" << fixed(100 * band.visibility_min, 0) << "&ndash;"
-        << fixed(100 * band.visibility_max, 0) << "%</td><td>" << band.count << "</td><td>"
+    out << "<tr><td>" << printf_fixed(100 * band.visibility_min, 0) << "&ndash;"
+        << printf_fixed(100 * band.visibility_max, 0) << "%</td><td>" << band.count << "</td><td>"
         << band.estimated << "</td>" << cell(band.median_variance_cm2, -1)
         << cell(band.mean_variance_cm2, -1) << cell(band.median_error_cm, 2)
         << cell(band.confident_share, 1, true) << cell(band.confident_inaccurate_share, 1, true)
@@ -619,7 +615,7 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
            "apart.</p>\n<table>\n<tr><th class=\"text\">estimates</th><th>with error</th>"
            "<th>no finite NEES</th>";
     for (const CoverageLevel& level : kCoverageLevels) {
-      out << "<th>inside " << fixed(100 * level.nominal, 0) << "% ellipsoid</th>";
+      out << "<th>inside " << printf_fixed(100 * level.nominal, 0) << "% ellipsoid</th>";
     }
     out << "<th>median NEES (3-dof: 2.37)</th></tr>\n";
     const auto coverage_row = [&out](const std::string& name, const Coverage& coverage) {
@@ -657,18 +653,18 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
   }
   out << ". F1 optimum: ";
   if (rec.best_f1.defined()) {
-    out << general(*rec.best_f1.value) << " cm&sup2; (F1 " << fixed(*rec.best_f1_value.value, 3)
-        << ")";
+    out << general(*rec.best_f1.value) << " cm&sup2; (F1 "
+        << printf_fixed(*rec.best_f1_value.value, 3) << ")";
   } else {
     out << "none (" << html_escape(rec.best_f1.undefined_reason) << ")";
   }
   out << ". The chosen threshold " << general(options.variance_threshold_cm2)
       << " cm&sup2; accepts " << t.chosen.accepted << " estimates, "
       << t.chosen.accepted_below_cutoff << " of them below "
-      << fixed(100 * options.visibility_cutoff, 0) << "% visibility.</p>\n";
+      << printf_fixed(100 * options.visibility_cutoff, 0) << "% visibility.</p>\n";
   out << "<table>\n<tr><th>threshold (cm&sup2;)</th><th>accepted</th><th>precision</th>"
       << "<th>recall</th><th>F1</th><th>accepted below "
-      << fixed(100 * options.visibility_cutoff, 0) << "%</th></tr>\n";
+      << printf_fixed(100 * options.visibility_cutoff, 0) << "%</th></tr>\n";
   for (const ThresholdRow& row : t.sweep) {
     const bool chosen = row.threshold_cm2 == options.variance_threshold_cm2;
     out << "<tr" << (chosen ? " style=\"font-weight:bold\"" : "") << "><td>"
@@ -680,9 +676,10 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
       << "\n<table>\n<tr><th>visibility cutoff</th><th>estimated objects below</th>"
       << "<th>accepted</th><th>accepted share</th><th>accepted and inaccurate</th></tr>\n";
   for (const CutoffRow& row : t.by_cutoff) {
-    out << "<tr><td>" << fixed(100 * row.visibility_cutoff, 0) << "%</td><td>" << row.objects_below
-        << "</td><td>" << row.accepted_below << "</td>" << cell(row.accepted_share, 1, true)
-        << "<td>" << row.accepted_below_inaccurate << "</td></tr>\n";
+    out << "<tr><td>" << printf_fixed(100 * row.visibility_cutoff, 0) << "%</td><td>"
+        << row.objects_below << "</td><td>" << row.accepted_below << "</td>"
+        << cell(row.accepted_share, 1, true) << "<td>" << row.accepted_below_inaccurate
+        << "</td></tr>\n";
   }
   out << "</table>\n";
   // The radius decision beside the variance threshold.
@@ -702,7 +699,7 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
   }
   out << ".</p>\n<table>\n<tr><th>radius R (cm)</th><th>equivalent threshold (cm&sup2;)</th>"
       << "<th>accepted</th><th>precision</th><th>recall</th><th>F1</th><th>accepted below "
-      << fixed(100 * options.visibility_cutoff, 0) << "%</th></tr>\n";
+      << printf_fixed(100 * options.visibility_cutoff, 0) << "%</th></tr>\n";
   for (const RadiusRow& radius : t.radius_sweep) {
     const bool chosen =
         options.confidence_radius_cm && radius.radius_cm == *options.confidence_radius_cm;
@@ -745,8 +742,8 @@ ReportFiles write_report(const std::filesystem::path& dir, const std::vector<Obj
   }
   ReportFiles files;
   std::filesystem::create_directories(dir / "plots");
-  files.objects_csv = dir / "objects.csv";
-  files.images_csv = dir / "images.csv";
+  files.objects_csv = dir / batch::report_objects_table().file_name;
+  files.images_csv = dir / batch::report_images_table().file_name;
   files.summary_json = dir / "summary.json";
   files.report_html = dir / "report.html";
   datasets::write_file_atomically(files.objects_csv, format_objects_csv(objects));
@@ -762,7 +759,7 @@ ReportFiles write_report(const std::filesystem::path& dir, const std::vector<Obj
 }
 
 std::vector<ObjectRow> load_report_objects(const std::filesystem::path& dir) {
-  const std::filesystem::path path = dir / "objects.csv";
+  const std::filesystem::path path = dir / batch::report_objects_table().file_name;
   if (!std::filesystem::exists(path)) {
     throw datasets::DatasetError(path,
                                  "no objects.csv in this folder: run `clutterscope report "

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <clutterscope/batch/formats.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/report/svg.hpp>
 #include <cmath>
@@ -25,10 +26,8 @@ constexpr int kSidePanelWidth = 190;  // legend and colour bar, right of the plo
 constexpr const char* kFont = "font-family=\"DejaVu Sans, Arial, sans-serif\"";
 
 std::string num(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.2f", value);
-  if (std::string(buffer) == "-0.00") return "0.00";
-  return buffer;
+  const std::string text = batch::printf_fixed(value, 2);
+  return text == "-0.00" ? "0.00" : text;
 }
 
 std::string svg_open(int width, int height, const std::string& title) {
@@ -52,15 +51,15 @@ std::string text_element(double x, double y, const std::string& text, const char
 
 // Tick label for a value: as few decimals as the tick step needs.
 std::string tick_label(double value, double step) {
-  char buffer[32];
+  std::string text;
   if (step <= 0.0) {
-    std::snprintf(buffer, sizeof(buffer), "%g", value);
+    text = batch::printf_general(value);
   } else {
     const int decimals = std::max(0, static_cast<int>(-std::floor(std::log10(step) + 1e-9)));
-    std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, value);
+    text = batch::printf_fixed(value, decimals);
   }
-  if (std::string(buffer).find_first_not_of("-0.") == std::string::npos) return "0";
-  return buffer;
+  if (text.find_first_not_of("-0.") == std::string::npos) return "0";
+  return text;
 }
 
 // A data range mapped onto a pixel range, linear or log10.

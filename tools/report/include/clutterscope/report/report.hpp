@@ -2,7 +2,7 @@
 
 // A clutter report from the joined object table: the analysis (counts, visibility
 // distribution, correlations with bootstrap intervals, visibility bands, threshold analysis,
-// per-image table), its summary.json (schema: tools/report_summary.schema.json), the HTML
+// per-image table), its summary.json (schema: tools/report/report_summary.schema.json), the HTML
 // report with inline plots, and the files of a report folder.
 
 #include <clutterscope/report/calibration.hpp>
