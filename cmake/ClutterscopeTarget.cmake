@@ -48,3 +48,30 @@ function(clutterscope_add_library name)
   target_link_libraries(clutterscope_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   clutterscope_configure_target(clutterscope_${name})
 endfunction()
+
+# Compiles the files of DIR matching GLOBS into TARGET as string literals (cmake/embed_files.cmake
+# generates FUNCTION() returning `const std::vector<ENTRY_TYPE>&` of {file name, text}, declared
+# in HEADER, a private header of TARGET). NAME_REGEX, NAME_RULE and UNIQUE_FIRST_GROUP check the
+# file names at build time.
+function(clutterscope_embed_files target)
+  cmake_parse_arguments(ARG "UNIQUE_FIRST_GROUP" "DIR;HEADER;NAMESPACE;ENTRY_TYPE;FUNCTION;NAME_REGEX;NAME_RULE" "GLOBS" ${ARGN})
+  set(absolute_globs "")
+  foreach(glob IN LISTS ARG_GLOBS)
+    list(APPEND absolute_globs "${ARG_DIR}/${glob}")
+  endforeach()
+  file(GLOB embedded_files CONFIGURE_DEPENDS ${absolute_globs})
+  list(JOIN ARG_GLOBS "," globs)
+  set(script "${PROJECT_SOURCE_DIR}/cmake/embed_files.cmake")
+  set(output "${CMAKE_CURRENT_BINARY_DIR}/generated/${ARG_FUNCTION}_data.cpp")
+  add_custom_command(
+    OUTPUT "${output}"
+    COMMAND "${CMAKE_COMMAND}" "-DINPUT_DIR=${ARG_DIR}" "-DGLOBS=${globs}" "-DOUTPUT=${output}"
+            "-DHEADER=${ARG_HEADER}" "-DNAMESPACE=${ARG_NAMESPACE}"
+            "-DENTRY_TYPE=${ARG_ENTRY_TYPE}" "-DFUNCTION=${ARG_FUNCTION}"
+            "-DNAME_REGEX=${ARG_NAME_REGEX}" "-DNAME_RULE=${ARG_NAME_RULE}"
+            "-DUNIQUE_FIRST_GROUP=${ARG_UNIQUE_FIRST_GROUP}" -P "${script}"
+    DEPENDS ${embedded_files} "${script}"
+    COMMENT "Embedding ${ARG_DIR}"
+    VERBATIM)
+  target_sources(${target} PRIVATE "${output}")
+endfunction()

@@ -5,7 +5,7 @@ Usage: scripts/ply_ascii_to_binary.py IN.ply OUT.ply
 
 The header is kept line for line except the format line. Scalar properties keep their declared
 types; a float32 value is rounded from its decimal text exactly (round half to even), the way
-a correctly rounding reader such as render/src/ply_reader.cpp (std::from_chars to float) reads
+a correctly rounding reader such as datasets/src/ply_reader.cpp (std::from_chars to float) reads
 it, so the binary file holds the very numbers the ASCII one stands for. Python 3 stdlib only.
 """
 import decimal

@@ -54,6 +54,12 @@ std::vector<unsigned char> encode_png(const cv::Mat& image, const fs::path& path
 
 }  // namespace
 
+std::string six_digits(int id) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%06d", id);
+  return text;
+}
+
 void write_file_atomically(const fs::path& path, const std::string& contents) {
   if (path.has_parent_path()) create_folders(path.parent_path());
   // A unique temporary name in the same folder, so the rename is atomic and concurrent

@@ -21,7 +21,7 @@ CatalogueItem make_item(int obj_id, const std::string& name, ShapeKind shape, do
   return item;
 }
 
-std::uint32_t add_vertex(TriangleMesh* mesh, const Eigen::Vector3d& position,
+std::uint32_t add_vertex(BasicMesh<double>* mesh, const Eigen::Vector3d& position,
                          const Eigen::Vector3d& normal) {
   mesh->positions.push_back(position);
   mesh->normals.push_back(normal.normalized());
@@ -30,7 +30,7 @@ std::uint32_t add_vertex(TriangleMesh* mesh, const Eigen::Vector3d& position,
 
 // One face of a box as a k x k grid; (u, v, normal) is right-handed so triangles wind
 // counter-clockwise seen from outside.
-void add_face(TriangleMesh* mesh, const Eigen::Vector3d& centre, const Eigen::Vector3d& u,
+void add_face(BasicMesh<double>* mesh, const Eigen::Vector3d& centre, const Eigen::Vector3d& u,
               const Eigen::Vector3d& v, const Eigen::Vector3d& normal, int k) {
   const std::uint32_t first = static_cast<std::uint32_t>(mesh->positions.size());
   for (int j = 0; j <= k; ++j) {
@@ -51,7 +51,7 @@ void add_face(TriangleMesh* mesh, const Eigen::Vector3d& centre, const Eigen::Ve
   }
 }
 
-void add_box(TriangleMesh* mesh, const Eigen::Vector3d& centre, const Eigen::Vector3d& size,
+void add_box(BasicMesh<double>* mesh, const Eigen::Vector3d& centre, const Eigen::Vector3d& size,
              int k) {
   const Eigen::Vector3d ex(size.x(), 0, 0), ey(0, size.y(), 0), ez(0, 0, size.z());
   add_face(mesh, centre + ez / 2, ex, ey, Eigen::Vector3d::UnitZ(), k);
@@ -64,7 +64,8 @@ void add_box(TriangleMesh* mesh, const Eigen::Vector3d& centre, const Eigen::Vec
 
 // A closed surface of revolution about z through the (radius, z) profile points, bottom to
 // top, with flat caps. Each profile segment gets its own vertices so cones shade correctly.
-void add_revolution(TriangleMesh* mesh, const std::vector<Eigen::Vector2d>& profile, int segments) {
+void add_revolution(BasicMesh<double>* mesh, const std::vector<Eigen::Vector2d>& profile,
+                    int segments) {
   const auto ring_point = [&](double radius, double z, int i) {
     const double angle = 2.0 * kPi * i / segments;
     return Eigen::Vector3d(radius * std::cos(angle), radius * std::sin(angle), z);
@@ -141,13 +142,13 @@ int find_item(const std::vector<CatalogueItem>& catalogue, const std::string& na
   return -1;
 }
 
-TriangleMesh tessellate(const CatalogueItem& item, int target_triangles) {
+BasicMesh<double> tessellate(const CatalogueItem& item, int target_triangles) {
   if (target_triangles < kMinTessellation || target_triangles > kMaxTessellation) {
     throw std::invalid_argument("tessellation must be in [" + std::to_string(kMinTessellation) +
                                 ", " + std::to_string(kMaxTessellation) + "] triangles, got " +
                                 std::to_string(target_triangles));
   }
-  TriangleMesh mesh;
+  BasicMesh<double> mesh;
   const Eigen::Vector3d& size = item.size;
   switch (item.shape) {
     case ShapeKind::kBox: {
@@ -193,7 +194,7 @@ TriangleMesh tessellate(const CatalogueItem& item, int target_triangles) {
   return mesh;
 }
 
-ModelInfo model_info(const CatalogueItem& item, const TriangleMesh& mesh,
+ModelInfo model_info(const CatalogueItem& item, const BasicMesh<double>& mesh,
                      const std::filesystem::path& mesh_path) {
   ModelInfo info;
   info.obj_id = item.obj_id;

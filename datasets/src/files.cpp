@@ -1,7 +1,6 @@
 #include <cerrno>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/files.hpp>
-#include <cstdio>
 #include <sstream>
 #include <system_error>
 
@@ -55,12 +54,6 @@ nlohmann::json read_json(const fs::path& path, const std::string& remedy) {
     throw DatasetError(path, std::string("malformed JSON (") + error.what() + ")" +
                                  (remedy.empty() ? "" : "; " + remedy));
   }
-}
-
-std::string six_digits(int id) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%06d", id);
-  return text;
 }
 
 }  // namespace clutterscope::datasets

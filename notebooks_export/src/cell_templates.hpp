@@ -1,7 +1,7 @@
 #pragma once
 
 // The cell templates compiled into the library from notebooks_export/templates/ (see
-// cmake/embed_templates.cmake, which generates the definition of cell_templates()).
+// cmake/embed_files.cmake, which generates the definition of cell_templates()).
 
 #include <string_view>
 #include <vector>

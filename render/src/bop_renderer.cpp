@@ -8,26 +8,12 @@
 
 #include "gl.hpp"
 #include "gl_program.hpp"
+#include "shader_sources.hpp"
 #include "window_bounds.hpp"
 
 namespace clutterscope::render {
 
 namespace {
-
-// bop_toolkit's depth vertex shader computes gl_Position = u_mvp * vec4(a_position, 1.0) from
-// one matrix; so does this one (a two-step projection * (model_view * p) rounds differently).
-// The fragment stage only writes depth, as bop_toolkit reads the depth buffer, not the colour.
-constexpr const char* kVertexShader = R"(#version 330 core
-layout(location = 0) in vec3 a_position;
-uniform mat4 u_mvp;
-void main() {
-  gl_Position = u_mvp * vec4(a_position, 1.0);
-}
-)";
-
-constexpr const char* kFragmentShader = R"(#version 330 core
-void main() {}
-)";
 
 using Matrix4 = std::array<std::array<double, 4>, 4>;
 
@@ -116,7 +102,7 @@ BopModel::~BopModel() = default;
 const Eigen::Vector3d& BopModel::bbox_min() const { return state_->bbox_min; }
 const Eigen::Vector3d& BopModel::bbox_size() const { return state_->bbox_size; }
 
-BopModel BopModel::upload(const Mesh& mesh) {
+BopModel BopModel::upload(const datasets::Mesh& mesh) {
   gl::check_uploadable(mesh, "BopModel::upload");
   BopModel model;
   State& state = *model.state_;
@@ -191,7 +177,13 @@ BopDepthRenderer::BopDepthRenderer(const EglContext& context) : state_(std::make
   glGetIntegerv(GL_MINOR_VERSION, &minor);
   state_->has_clip_control = major * 10 + minor >= 45;
   state_->max_size = gl::max_target_size();
-  state_->program = gl::link_program(kVertexShader, kFragmentShader, "BOP depth renderer");
+  // bop_toolkit's depth vertex shader computes gl_Position = u_mvp * vec4(a_position, 1.0) from
+  // one matrix; so does bop_depth.vert.glsl (a two-step projection * (model_view * p) rounds
+  // differently). The fragment stage only writes depth, as bop_toolkit reads the depth buffer,
+  // not the colour.
+  state_->program =
+      gl::link_program(detail::shader_source("bop_depth.vert.glsl").c_str(),
+                       detail::shader_source("bop_depth.frag.glsl").c_str(), "BOP depth renderer");
   const GLuint program = state_->program.get();
   state_->mvp = glGetUniformLocation(program, "u_mvp");
   gl::check_error("BopDepthRenderer setup");

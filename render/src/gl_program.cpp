@@ -54,7 +54,7 @@ void check_error(const char* what) {
   }
 }
 
-void check_uploadable(const Mesh& mesh, const char* who) {
+void check_uploadable(const datasets::Mesh& mesh, const char* who) {
   const std::string name(who);
   if (glGetString(GL_VERSION) == nullptr) {
     throw RenderError(name + " needs a current GL context (create an EglContext)");
@@ -74,7 +74,7 @@ void check_uploadable(const Mesh& mesh, const char* who) {
   }
 }
 
-MeshBuffers upload_mesh_buffers(const Mesh& mesh) {
+MeshBuffers upload_mesh_buffers(const datasets::Mesh& mesh) {
   MeshBuffers buffers{make_vertex_array(), make_buffer(), make_buffer()};
   glBindVertexArray(buffers.vertex_array.get());
   glBindBuffer(GL_ARRAY_BUFFER, buffers.vertices.get());

@@ -2,7 +2,7 @@
 
 // Private: shader programs and GL error checks shared by the renderers.
 
-#include <clutterscope/render/mesh.hpp>
+#include <clutterscope/datasets/mesh.hpp>
 
 #include "gl.hpp"
 
@@ -10,7 +10,7 @@ namespace clutterscope::render::gl {
 
 // Throws RenderError without a current GL context, std::invalid_argument for a mesh without
 // triangles, too large for one draw, or with an index out of range; `who` names the caller.
-void check_uploadable(const Mesh& mesh, const char* who);
+void check_uploadable(const datasets::Mesh& mesh, const char* who);
 
 // A mesh's positions (attribute 0, vec3) and triangles (the element buffer) on the GPU, bound
 // through one vertex array. Call check_uploadable first.
@@ -19,7 +19,7 @@ struct MeshBuffers {
   Buffer vertices;
   Buffer indices;
 };
-MeshBuffers upload_mesh_buffers(const Mesh& mesh);
+MeshBuffers upload_mesh_buffers(const datasets::Mesh& mesh);
 
 // Compiles and links a vertex + fragment program. Throws RenderError with `what` and the
 // driver's log when either step fails.

@@ -21,8 +21,8 @@ bool ModelCacheOptions::IsValid(std::string* why) const {
   return true;
 }
 
-DecimateOptions ModelCacheOptions::proxy_decimation() const {
-  DecimateOptions decimation;
+datasets::DecimateOptions ModelCacheOptions::proxy_decimation() const {
+  datasets::DecimateOptions decimation;
   decimation.max_triangles = proxy_triangles;
   decimation.tolerance_m = proxy_tolerance_m;
   return decimation;
@@ -31,7 +31,7 @@ DecimateOptions ModelCacheOptions::proxy_decimation() const {
 struct ModelCache::Entry {
   std::unique_ptr<GpuMesh> full;
   std::unique_ptr<GpuMesh> proxy;
-  std::unique_ptr<Mesh> cpu;
+  std::unique_ptr<datasets::Mesh> cpu;
 };
 
 ModelCache::ModelCache(const datasets::BopDataset& dataset, ModelCacheOptions options)
@@ -47,16 +47,16 @@ ModelCache::Entry& ModelCache::entry(int obj_id) {
   auto found = entries_.find(obj_id);
   if (found != entries_.end()) return *found->second;
   const datasets::ModelInfo& info = dataset_->model(obj_id);
-  MeshLoadOptions load_options;
+  datasets::MeshLoadOptions load_options;
   load_options.scale_to_metres = options_.scale_to_metres;
-  Mesh mesh = load_mesh(info.mesh_path, load_options);
+  datasets::Mesh mesh = datasets::load_mesh(info.mesh_path, load_options);
   auto loaded = std::make_unique<Entry>();
   loaded->full = std::make_unique<GpuMesh>(GpuMesh::upload(mesh));
   if (options_.proxy_triangles > 0) {
-    loaded->proxy =
-        std::make_unique<GpuMesh>(GpuMesh::upload(decimate(mesh, options_.proxy_decimation())));
+    loaded->proxy = std::make_unique<GpuMesh>(
+        GpuMesh::upload(datasets::decimate(mesh, options_.proxy_decimation())));
   }
-  if (options_.keep_cpu_meshes) loaded->cpu = std::make_unique<Mesh>(std::move(mesh));
+  if (options_.keep_cpu_meshes) loaded->cpu = std::make_unique<datasets::Mesh>(std::move(mesh));
   return *entries_.emplace(obj_id, std::move(loaded)).first->second;
 }
 
@@ -69,7 +69,7 @@ const GpuMesh& ModelCache::proxy(int obj_id) {
   return *entry(obj_id).proxy;
 }
 
-const Mesh& ModelCache::cpu_mesh(int obj_id) {
+const datasets::Mesh& ModelCache::cpu_mesh(int obj_id) {
   if (!options_.keep_cpu_meshes) {
     throw std::logic_error("ModelCache::cpu_mesh: ModelCacheOptions::keep_cpu_meshes is off");
   }

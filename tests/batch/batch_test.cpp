@@ -231,6 +231,7 @@ TEST(Batch, ShardsMergeToTheBytesOfOneRun) {
   MergeOptions merge;
   merge.inputs = shard_dirs;
   merge.out_dir = merged;
+  merge.outputs = {testing::fake_output()};
   merge.quiet = true;
   const BatchResult result = merge_batches(merge);
   EXPECT_TRUE(result.complete);
@@ -260,6 +261,7 @@ TEST(Batch, MergeReportsMissingItems) {
   MergeOptions merge;
   merge.inputs = {shard0};
   merge.out_dir = fresh_dir("missing_out");
+  merge.outputs = {testing::fake_output()};
   merge.quiet = true;
   try {
     merge_batches(merge);
@@ -271,6 +273,28 @@ TEST(Batch, MergeReportsMissingItems) {
         << error.what();
   }
   EXPECT_FALSE(fs::exists(merge.out_dir / "a.csv"));
+}
+
+TEST(Batch, MergeRefusesACommandNotListed) {
+  FakeJobOptions fake;
+  fake.scenes = 1;
+  fake.images_per_scene = 2;
+  const fs::path whole = fresh_dir("unlisted_whole");
+  run_batch(fake_job(whole, fake), options_for(whole, 1));
+  MergeOptions merge;
+  merge.inputs = {whole};
+  merge.out_dir = fresh_dir("unlisted_out");
+  merge.quiet = true;
+  try {
+    merge_batches(merge);  // no outputs listed
+    FAIL() << "a command the merge does not list must be refused";
+  } catch (const UsageError& error) {
+    EXPECT_NE(std::string(error.what())
+                  .find("command 'fake', which this clutterscope does not "
+                        "know"),
+              std::string::npos)
+        << error.what();
+  }
 }
 
 TEST(Batch, ShardsSharingOneFolderFinalizeWhenComplete) {
@@ -318,6 +342,7 @@ TEST(Batch, DifferentJobInTheSameFolderIsRefused) {
   MergeOptions merge;
   merge.inputs = {out, other_dir};
   merge.out_dir = fresh_dir("fingerprint_merge");
+  merge.outputs = {testing::fake_output()};
   merge.quiet = true;
   EXPECT_THROW(merge_batches(merge), UsageError);
   merge.inputs = {fresh_dir("not_a_batch")};

@@ -122,17 +122,17 @@ struct FakeWorker {
 }  // namespace
 
 const BatchOutputSpec& fake_output() {
-  if (find_batch_output("fake") == nullptr) {
-    BatchOutputSpec spec;
-    spec.command = "fake";
-    spec.tables = {{"a.csv", "split,scene_id,im_id,value,padding"},
+  static const BatchOutputSpec spec = [] {
+    BatchOutputSpec fake;
+    fake.command = "fake";
+    fake.tables = {{"a.csv", "split,scene_id,im_id,value,padding"},
                    {"b.csv", "split,scene_id,im_id,k"}};
-    spec.make_summary = [](const nlohmann::json& options, const fs::path& out_dir) {
+    fake.make_summary = [](const nlohmann::json& options, const fs::path& out_dir) {
       return std::make_unique<FakeSummary>(options, out_dir);
     };
-    register_batch_output(std::move(spec));
-  }
-  return *find_batch_output("fake");
+    return fake;
+  }();
+  return spec;
 }
 
 std::vector<ImageKey> fake_items(int scenes, int images_per_scene) {

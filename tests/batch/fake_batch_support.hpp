@@ -35,7 +35,7 @@ struct FakeJobOptions {
   std::map<int, int> input_versions;
 };
 
-// The registered output spec of the command "fake": tables a.csv and b.csv, a summary that
+// The output spec of the command "fake": tables a.csv and b.csv, a summary that
 // sums the per-item values and writes extra/scenes.txt as scenes end.
 const BatchOutputSpec& fake_output();
 

@@ -418,7 +418,7 @@ TEST(Catalogue, HasTwelveHouseholdItemsTrayAndTable) {
 }
 
 // Signed volume by the divergence theorem: exact for a closed, outward-wound mesh.
-double mesh_volume(const TriangleMesh& mesh) {
+double mesh_volume(const BasicMesh<double>& mesh) {
   double six_volume = 0;
   for (const auto& t : mesh.triangles) {
     six_volume += mesh.positions[t[0]].dot(mesh.positions[t[1]].cross(mesh.positions[t[2]]));
@@ -434,7 +434,7 @@ TEST(Catalogue, TessellationIsControllableAndClosed) {
   EXPECT_EQ(tessellate(cereal, 12).triangles.size(), 12u);
   for (const auto& item : catalogue) {
     for (int target : {12, 500, 2000, 5000}) {
-      const TriangleMesh mesh = tessellate(item, target);
+      const BasicMesh<double> mesh = tessellate(item, target);
       EXPECT_LE(mesh.triangles.size(), static_cast<std::size_t>(std::max(target, 64)))
           << item.name << " at " << target;
       if (target >= 500) {
@@ -446,7 +446,7 @@ TEST(Catalogue, TessellationIsControllableAndClosed) {
   }
   // Closed forms: box volume, regular-polygon prism volume.
   EXPECT_NEAR(mesh_volume(tessellate(cereal, 1200)), cereal.size.prod(), 1e-12);
-  const TriangleMesh can = tessellate(soup, 400);
+  const BasicMesh<double> can = tessellate(soup, 400);
   const int segments = static_cast<int>(can.triangles.size()) / 4;
   const double r = soup.size.x() / 2;
   EXPECT_NEAR(mesh_volume(can),

@@ -33,10 +33,5 @@ TEST(ReadFiles, ErrorsNameTheFile) {
   }
 }
 
-TEST(ReadFiles, SixDigitIds) {
-  EXPECT_EQ(six_digits(12), "000012");
-  EXPECT_EQ(six_digits(1234567), "1234567");
-}
-
 }  // namespace
 }  // namespace clutterscope::datasets

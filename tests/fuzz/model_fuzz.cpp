@@ -1,10 +1,10 @@
-// Fuzz target: model loading, render::load_mesh, as every command loads a model of
+// Fuzz target: model loading, datasets::load_mesh, as every command loads a model of
 // models_info.json. The file gets the extension its bytes suggest, as a dataset's models
 // would: ".ply" after a "ply" magic, ".stl" after "solid" or for a binary body of at least
 // 84 bytes (header + triangle count), else ".obj". A loaded mesh must keep load_mesh's
 // contract: finite positions, every index in range, normals none or one per vertex.
 #include <clutterscope/datasets/errors.hpp>
-#include <clutterscope/render/mesh.hpp>
+#include <clutterscope/datasets/mesh.hpp>
 #include <cstdlib>
 #include <cstring>
 
@@ -31,7 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       clutterscope::fuzz::scratch_dir() / (std::string("model") + extension_of(data, size));
   clutterscope::fuzz::write_bytes(path, data, size);
   try {
-    const clutterscope::render::Mesh mesh = clutterscope::render::load_mesh(path);
+    const clutterscope::datasets::Mesh mesh = clutterscope::datasets::load_mesh(path);
     const std::size_t vertices = mesh.positions.size();
     for (const auto& p : mesh.positions) {
       if (!p.allFinite()) std::abort();

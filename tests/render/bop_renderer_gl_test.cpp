@@ -27,7 +27,7 @@ class BopRendererGl : public ::testing::Test {
 
   // A box of `size_mm` (full extents) with 12 * 8^2 triangles, in millimetres.
   static BopModel box_model(const Eigen::Vector3f& size_mm) {
-    Mesh mesh = box_mesh(size_mm, 8);
+    datasets::Mesh mesh = datasets::box_mesh(size_mm, 8);
     return BopModel::upload(mesh);
   }
 
@@ -123,7 +123,7 @@ TEST_F(BopRendererGl, SharesTheContextWithTheRendererWithoutChangingItsResults) 
   // BopDepthRenderer switches the clip depth range to GL's default [-1, 1]; the Renderer on the
   // same context uses [0, 1] and must render the same before and after.
   Renderer renderer(*context_);
-  const GpuMesh mesh = GpuMesh::upload(box_mesh({0.08f, 0.06f, 0.04f}, 8));
+  const GpuMesh mesh = GpuMesh::upload(datasets::box_mesh({0.08f, 0.06f, 0.04f}, 8));
   Instance instance;
   instance.mesh = &mesh;
   instance.model_to_camera.linear() = rotation_;
@@ -157,7 +157,7 @@ TEST_F(BopRendererGl, RejectsInvalidTargetsAndPoses) {
   nan_t.x() = std::nan("");
   EXPECT_THROW(renderer_->render_object(model, rotation_, nan_t, target_, cv::Rect(0, 0, 4, 4)),
                std::invalid_argument);
-  EXPECT_THROW(BopModel::upload(Mesh{}), std::invalid_argument);
+  EXPECT_THROW(BopModel::upload(datasets::Mesh{}), std::invalid_argument);
   // A corner behind the camera: the projection is unbounded, the whole target is the window.
   EXPECT_EQ(
       BopDepthRenderer::projected_rect(model, Eigen::Matrix3d::Identity(), {0, 0, 2}, target_),

@@ -53,7 +53,7 @@ TEST_F(ContextGl, ContextsWorkAfterEveryDisplayWasTerminated) {
     for (const EglContext* context : {&a, &b}) {
       context->make_current();
       Renderer renderer(*context);
-      const GpuMesh box = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.1f, 0.1f, 0.1f), 1));
+      const GpuMesh box = GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.1f, 0.1f, 0.1f), 1));
       Intrinsics k;
       k.fx = k.fy = 500;
       k.cx = 32;

@@ -50,7 +50,8 @@ class TinyDataset : public ::testing::Test {
     const datasets::BopWriter writer(root_);
     fs::create_directories(root_ / "models");
     const fs::path small_path = root_ / "models" / "obj_000001.ply";
-    write_ply(small_path, box_mesh(kSmallBox.cast<float>(), 20));  // 4800 triangles
+    datasets::write_ply(small_path,
+                        datasets::box_mesh(kSmallBox.cast<float>(), 20));  // 4800 triangles
     const fs::path large_path = root_ / "models" / "obj_000002.ply";
     datasets::write_box_ply(large_path, kLargeBox);
     writer.write_models_info({datasets::box_model_info(1, kSmallBox, small_path, "small"),

@@ -107,7 +107,7 @@ TEST_F(RendererGl, ReportsRendererAndVersion) {
 
 TEST_F(RendererGl, BoxAtKnownPoseHasAnalyticDepthAndProjectedSilhouette) {
   const Eigen::Vector3f size(0.12f, 0.08f, 0.05f);
-  const GpuMesh mesh = GpuMesh::upload(box_mesh(size));
+  const GpuMesh mesh = GpuMesh::upload(datasets::box_mesh(size));
   for (const PixelCenter center : {PixelCenter::kHalfPixel, PixelCenter::kInteger}) {
     const Intrinsics k = camera_640x480(center);
     const Eigen::Isometry3d p = pose(0.35, -0.4, 0.5, Eigen::Vector3d(0.03, -0.02, 0.7));
@@ -176,7 +176,7 @@ TEST_F(RendererGl, PixelCentreConventionShiftsSamplesByHalfAPixel) {
   const double z = 1.0;
   // Edges at image x = 100.3 and x = 150.3, y = 200.7 and 260.7.
   const double x0 = 100.3, x1 = 150.3, y0 = 200.7, y1 = 260.7;
-  Mesh square;
+  datasets::Mesh square;
   const auto to_camera = [&](double x, double y) {
     return Eigen::Vector3f(static_cast<float>((x - k.cx) * z / k.fx),
                            static_cast<float>((y - k.cy) * z / k.fy), static_cast<float>(z));
@@ -258,8 +258,8 @@ std::vector<TileRequest> random_hypotheses(const std::vector<const GpuMesh*>& me
 // equations, largest on surfaces seen at grazing angles). Alternating meshes draw each tile on
 // its own; one mesh draws runs of tiles as instanced draws, one viewport per tile.
 void expect_tiles_equal_single_renders(Renderer& renderer, bool bitwise_depth, bool one_mesh) {
-  const GpuMesh box = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.06f, 0.04f, 0.03f), 4));
-  const GpuMesh bar = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.1f, 0.02f, 0.02f), 1));
+  const GpuMesh box = GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.06f, 0.04f, 0.03f), 4));
+  const GpuMesh bar = GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.1f, 0.02f, 0.02f), 1));
   std::mt19937_64 rng(20261122);
   const std::vector<const GpuMesh*> meshes =
       one_mesh ? std::vector<const GpuMesh*>{&box} : std::vector<const GpuMesh*>{&box, &bar};
@@ -303,8 +303,8 @@ TEST_F(RendererGl, TiledBatchEqualsHypothesesRenderedOneByOneInInterpolatedMode)
 // (culling the wrong side would show the far faces) up to float rounding where faces meet, in
 // runs of one mesh and alternating.
 TEST_F(RendererGl, DepthOnlyTilesWithBackFacesCulledEqualFullTilesOfClosedMeshes) {
-  const GpuMesh box = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.06f, 0.04f, 0.03f), 4));
-  const GpuMesh bar = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.1f, 0.02f, 0.02f), 1));
+  const GpuMesh box = GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.06f, 0.04f, 0.03f), 4));
+  const GpuMesh bar = GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.1f, 0.02f, 0.02f), 1));
   std::mt19937_64 rng(7);
   std::vector<TileRequest> requests = random_hypotheses({&box}, 20, rng);
   for (const TileRequest& request : random_hypotheses({&box, &bar}, 10, rng))
@@ -339,7 +339,7 @@ TEST_F(RendererGl, DepthOnlyTilesWithBackFacesCulledEqualFullTilesOfClosedMeshes
 }
 
 TEST_F(RendererGl, ExactAndInterpolatedDepthAgree) {
-  const GpuMesh box = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.08f, 0.06f, 0.05f), 6));
+  const GpuMesh box = GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.08f, 0.06f, 0.05f), 6));
   RendererOptions options;
   options.depth = DepthMode::kExactPerTile;
   Renderer exact(*context_, options);
@@ -373,7 +373,8 @@ TEST_F(RendererGl, TwoThreadsWithOwnContextsGiveBitIdenticalImages) {
     try {
       const EglContext context = EglContext::create();
       Renderer renderer(context);
-      const GpuMesh box = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.08f, 0.06f, 0.05f), 6));
+      const GpuMesh box =
+          GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.08f, 0.06f, 0.05f), 6));
       for (int repeat = 0; repeat < 5; ++repeat) {
         *out = renderer.render(camera_640x480(), six_boxes(box));
       }
@@ -393,7 +394,7 @@ TEST_F(RendererGl, TwoThreadsWithOwnContextsGiveBitIdenticalImages) {
   EXPECT_TRUE(bitwise_equal(a.depth, b.depth));
   EXPECT_TRUE(bitwise_equal(a.labels, b.labels));
   // And equal to the same scene rendered by the suite's context on this thread.
-  const GpuMesh box = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.08f, 0.06f, 0.05f), 6));
+  const GpuMesh box = GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.08f, 0.06f, 0.05f), 6));
   const DepthLabelImage here = renderer().render(camera_640x480(), six_boxes(box));
   EXPECT_TRUE(bitwise_equal(a.depth, here.depth));
   EXPECT_TRUE(bitwise_equal(a.labels, here.labels));
@@ -425,8 +426,9 @@ struct ReferenceCounts {
 };
 
 TEST_F(RendererGl, CountVisibilityEqualsFullReadbacksOfEachObjectAlone) {
-  const GpuMesh small = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.07f, 0.05f, 0.04f), 3));
-  const GpuMesh wall = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.01f), 1));
+  const GpuMesh small =
+      GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.07f, 0.05f, 0.04f), 3));
+  const GpuMesh wall = GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.01f), 1));
   std::mt19937_64 rng(7);
   const std::vector<Instance> instances = cluttered_scene(small, wall, rng);
   const Intrinsics k = camera_640x480();
@@ -466,10 +468,10 @@ TEST_F(RendererGl, CountVisibilityEqualsFullReadbacksOfEachObjectAlone) {
 // wound inward counts like the box, and a box open towards the camera — whose inside (back
 // faces) fills its silhouette — still counts its whole outline.
 TEST_F(RendererGl, CountVisibilitySkipsBackFacesOnlyOfClosedMeshes) {
-  const Mesh box = box_mesh(Eigen::Vector3f(0.08f, 0.06f, 0.05f), 2);
-  Mesh inward = box;
+  const datasets::Mesh box = datasets::box_mesh(Eigen::Vector3f(0.08f, 0.06f, 0.05f), 2);
+  datasets::Mesh inward = box;
   for (auto& t : inward.triangles) std::swap(t[1], t[2]);
-  Mesh open = box;
+  datasets::Mesh open = box;
   open.triangles.clear();
   for (const auto& t : box.triangles) {
     const bool faces_camera = box.positions[t[0]].z() < -0.02f &&
@@ -493,8 +495,9 @@ TEST_F(RendererGl, CountVisibilitySkipsBackFacesOnlyOfClosedMeshes) {
 }
 
 TEST_F(RendererGl, CountVisibilityOnTheBopCanvasCountsPartsOutsideTheImage) {
-  const GpuMesh small = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.07f, 0.05f, 0.04f), 3));
-  const GpuMesh wall = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.01f), 1));
+  const GpuMesh small =
+      GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.07f, 0.05f, 0.04f), 3));
+  const GpuMesh wall = GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.01f), 1));
   std::mt19937_64 rng(8);
   const std::vector<Instance> instances = cluttered_scene(small, wall, rng);
   const Intrinsics k = camera_640x480();
@@ -517,8 +520,9 @@ TEST_F(RendererGl, CountVisibilityOnTheBopCanvasCountsPartsOutsideTheImage) {
 }
 
 TEST_F(RendererGl, RenderEachAloneMatchesFullRendersOfEachObject) {
-  const GpuMesh small = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.07f, 0.05f, 0.04f), 3));
-  const GpuMesh wall = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.01f), 1));
+  const GpuMesh small =
+      GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.07f, 0.05f, 0.04f), 3));
+  const GpuMesh wall = GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.01f), 1));
   std::mt19937_64 rng(9);
   std::vector<Instance> instances = cluttered_scene(small, wall, rng);
   instances.resize(12);
@@ -550,7 +554,7 @@ TEST_F(RendererGl, RejectsInvalidInput) {
                std::invalid_argument);
   CountOptions even;
   even.canvas_factor = 2;
-  const GpuMesh box = GpuMesh::upload(box_mesh(Eigen::Vector3f(0.1f, 0.1f, 0.1f)));
+  const GpuMesh box = GpuMesh::upload(datasets::box_mesh(Eigen::Vector3f(0.1f, 0.1f, 0.1f)));
   EXPECT_THROW(
       renderer().count_visibility(camera_640x480(), {{&box, pose(0, 0, 0, {0, 0, 1}), 1}}, even),
       std::invalid_argument);

@@ -146,8 +146,8 @@ TEST_F(EstimateGl, TiledScoresMatchSingleRendersAndThePointSplatScorer) {
   // differ only at silhouette edges (a splat covers a grid pixel its points fall in, the
   // rasteriser the pixels whose centre is covered): at most one edge ring of grid pixels,
   // each costing at most the truncation.
-  const render::Mesh proxy =
-      render::decimate(cache.cpu_mesh(gt.obj_id), cache_options.proxy_decimation());
+  const datasets::Mesh proxy =
+      datasets::decimate(cache.cpu_mesh(gt.obj_id), cache_options.proxy_decimation());
   std::vector<double> areas;
   for (const auto& t : proxy.triangles)
     areas.push_back(0.5 * double((proxy.positions[t[1]] - proxy.positions[t[0]])

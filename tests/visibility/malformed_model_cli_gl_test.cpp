@@ -6,8 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/render/context.hpp>
-#include <clutterscope/render/mesh.hpp>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -32,7 +32,7 @@ constexpr const char* kModel = "models/obj_000007.ply";
 // `bad_face` the second index of face 12.
 std::string ascii_model(const fs::path& binary, const std::string& bad_vertex,
                         const std::string& bad_face) {
-  const render::Mesh mesh = render::load_mesh(binary, {1.0});
+  const datasets::Mesh mesh = datasets::load_mesh(binary, {1.0});
   std::ostringstream text;
   text << "ply\nformat ascii 1.0\nelement vertex " << mesh.positions.size()
        << "\nproperty float x\nproperty float y\nproperty float z\nelement face "

@@ -6,8 +6,8 @@
 
 namespace clutterscope::visibility::testing {
 
-render::Mesh box_mesh(const Eigen::Vector3d& size) {
-  render::Mesh mesh;
+datasets::Mesh box_mesh(const Eigen::Vector3d& size) {
+  datasets::Mesh mesh;
   const Eigen::Vector3f half = (0.5 * size).cast<float>();
   for (int i = 0; i < 8; ++i) {
     mesh.positions.emplace_back((i & 1) ? half.x() : -half.x(), (i & 2) ? half.y() : -half.y(),

@@ -8,8 +8,8 @@
 // compare exactly only when no pixel is ambiguous, and within the ambiguous count otherwise.
 
 #include <Eigen/Geometry>
+#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/datasets/scene.hpp>
-#include <clutterscope/render/mesh.hpp>
 #include <clutterscope/visibility/bop_visibility.hpp>
 #include <cstdint>
 #include <opencv2/core.hpp>
@@ -24,7 +24,7 @@ struct RayBox {
 };
 
 // The same box as a triangle mesh (8 vertices, 12 triangles), for the renderer.
-render::Mesh box_mesh(const Eigen::Vector3d& size);
+datasets::Mesh box_mesh(const Eigen::Vector3d& size);
 
 struct RayCastObject {
   std::int64_t silhouette_px = 0;     // K_i: pixels of the image the box covers alone

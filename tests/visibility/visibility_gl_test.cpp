@@ -51,7 +51,7 @@ class VisibilityGl : public ::testing::Test {
   std::vector<BopObject> upload_bop(const std::vector<RayBox>& boxes) {
     std::vector<BopObject> objects;
     for (const RayBox& box : boxes) {
-      render::Mesh mesh_mm = testing::box_mesh(box.size);
+      datasets::Mesh mesh_mm = testing::box_mesh(box.size);
       for (Eigen::Vector3f& p : mesh_mm.positions) p *= 1000.0f;
       bop_models_.push_back(std::make_unique<render::BopModel>(render::BopModel::upload(mesh_mm)));
       BopObject object;

@@ -33,7 +33,7 @@ using Clock = std::chrono::steady_clock;
 constexpr int kIcpObservedPoints = 600;
 
 // Model surface points (model frame, metres), area-uniform on the triangles, for ICP.
-Eigen::Matrix3Xd surface_points(const render::Mesh& mesh, int count, std::mt19937_64& rng) {
+Eigen::Matrix3Xd surface_points(const datasets::Mesh& mesh, int count, std::mt19937_64& rng) {
   std::vector<double> areas;
   for (const auto& t : mesh.triangles) {
     const Eigen::Vector3f a = mesh.positions[t[0]], b = mesh.positions[t[1]],
@@ -61,7 +61,7 @@ Eigen::Matrix3Xd surface_points(const render::Mesh& mesh, int count, std::mt1993
 
 // Height (support frame) of the upward-facing surface of a fixed support under the vertical
 // line through (x, y): the tray's floor top, the table's top. The box top when none is found.
-double support_surface_height(const render::Mesh& mesh, const Eigen::Isometry3d& model_to_support,
+double support_surface_height(const datasets::Mesh& mesh, const Eigen::Isometry3d& model_to_support,
                               const Eigen::Vector2d& xy, double box_top) {
   double best = -std::numeric_limits<double>::infinity();
   for (const auto& t : mesh.triangles) {
@@ -189,7 +189,7 @@ struct MatchedBox {
 // at u + 0.5), clipped to the image as the detector's box is.
 class AmodalBoxUnary : public estimator::PointwiseLogPotential {
  public:
-  AmodalBoxUnary(const render::Mesh& mesh, const Eigen::Matrix3d& rotation,
+  AmodalBoxUnary(const datasets::Mesh& mesh, const Eigen::Matrix3d& rotation,
                  const Eigen::Vector3d& model_centre, const Eigen::Isometry3d& support_to_camera,
                  const Eigen::Matrix3d& k, int width, int height, const Eigen::Vector4d& bbox,
                  double sigma)

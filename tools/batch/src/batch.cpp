@@ -10,7 +10,6 @@
 #include <clutterscope/datasets/errors.hpp>
 #include <cstdio>
 #include <fstream>
-#include <map>
 #include <mutex>
 #include <sstream>
 #include <thread>
@@ -32,11 +31,6 @@ nlohmann::json BatchTotals::to_json() const {
 }
 
 namespace {
-
-std::map<std::string, BatchOutputSpec>& output_registry() {
-  static std::map<std::string, BatchOutputSpec> registry;
-  return registry;
-}
 
 // "split test, scene 3, image 12", for messages that must say which image failed.
 std::string describe(const ImageKey& key) {
@@ -165,16 +159,6 @@ void write_run_json(const fs::path& out_dir, const std::string& command,
 }
 
 }  // namespace
-
-void register_batch_output(BatchOutputSpec spec) {
-  std::string name = spec.command;
-  output_registry()[name] = std::move(spec);
-}
-
-const BatchOutputSpec* find_batch_output(const std::string& command) {
-  const auto found = output_registry().find(command);
-  return found == output_registry().end() ? nullptr : &found->second;
-}
 
 Shard parse_shard(const std::string& text) {
   const std::string usage = "--shard expects I/N with 0 <= I < N (e.g. 0/4), got '" + text + "'";
@@ -309,8 +293,10 @@ BatchResult merge_batches(const MergeOptions& options) {
     inputs[i].require_same_job(inputs[0]);
   }
   const std::string& command = inputs[0].command();
-  const BatchOutputSpec* spec = find_batch_output(command);
-  if (spec == nullptr) {
+  const auto spec =
+      std::find_if(options.outputs.begin(), options.outputs.end(),
+                   [&](const BatchOutputSpec& output) { return output.command == command; });
+  if (spec == options.outputs.end()) {
     throw UsageError("merge: " + options.inputs[0].string() + " holds results of command '" +
                      command + "', which this clutterscope does not know");
   }

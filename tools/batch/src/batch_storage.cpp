@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/storage.hpp>
+#include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/files.hpp>
 #include <fstream>

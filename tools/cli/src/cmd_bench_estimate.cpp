@@ -8,9 +8,9 @@
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/cli/dataset_options.hpp>
 #include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/estimator/bench.hpp>
 #include <clutterscope/render/context.hpp>
-#include <clutterscope/render/mesh.hpp>
 #include <clutterscope/scene_estimation/scene_estimate.hpp>
 #include <cmath>
 #include <cstdio>
@@ -83,17 +83,17 @@ SceneTimes run_images(scene_estimation::SceneEstimator& estimator,
 // The proxies the unary renders: triangles of each model before -> after, and the time.
 void print_proxies(const datasets::BopDataset& dataset,
                    const scene_estimation::EstimateOptions& options) {
-  const render::DecimateOptions decimation = options.model_cache().proxy_decimation();
+  const datasets::DecimateOptions decimation = options.model_cache().proxy_decimation();
   std::printf(
       "proxies (QEM edge collapse, cap %zu, tolerance %.2f mm), obj_id:triangles(max distance "
       "mm):",
       decimation.max_triangles, 1e3 * decimation.tolerance_m);
   double seconds = 0;
   for (const datasets::ModelInfo& model : dataset.models()) {
-    const render::Mesh mesh = render::load_mesh(model.mesh_path);
+    const datasets::Mesh mesh = datasets::load_mesh(model.mesh_path);
     const Clock::time_point start = Clock::now();
-    render::DecimateSummary summary;
-    const render::Mesh proxy = render::decimate(mesh, decimation, &summary);
+    datasets::DecimateSummary summary;
+    const datasets::Mesh proxy = datasets::decimate(mesh, decimation, &summary);
     seconds += std::chrono::duration<double>(Clock::now() - start).count();
     std::printf(" %d:%zu->%zu(%.2f)", model.obj_id, mesh.triangle_count(), proxy.triangle_count(),
                 1e3 * summary.max_distance_m);

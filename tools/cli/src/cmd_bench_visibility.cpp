@@ -10,8 +10,8 @@
 #include <atomic>
 #include <chrono>
 #include <clutterscope/batch/batch.hpp>
+#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/render/context.hpp>
-#include <clutterscope/render/mesh.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <clutterscope/visibility/bop_visibility.hpp>
 #include <clutterscope/visibility/image_visibility.hpp>
@@ -48,9 +48,9 @@ struct BenchArguments {
 };
 
 // A closed cylinder (axis z) of about `triangles` triangles: sides and two fan caps.
-render::Mesh cylinder_mesh(double radius, double height, int triangles) {
+datasets::Mesh cylinder_mesh(double radius, double height, int triangles) {
   const int segments = std::max(3, triangles / 4);
-  render::Mesh mesh;
+  datasets::Mesh mesh;
   const float h = static_cast<float>(height / 2);
   for (int s = 0; s < segments; ++s) {
     const double angle = 2.0 * EIGEN_PI * s / segments;
@@ -74,9 +74,9 @@ render::Mesh cylinder_mesh(double radius, double height, int triangles) {
 }
 
 // A box whose faces are split into k x k quads (12 k^2 triangles, about `triangles`).
-render::Mesh subdivided_box_mesh(const Eigen::Vector3d& size, int triangles) {
+datasets::Mesh subdivided_box_mesh(const Eigen::Vector3d& size, int triangles) {
   const int k = std::max(1, static_cast<int>(std::lround(std::sqrt(triangles / 12.0))));
-  render::Mesh mesh;
+  datasets::Mesh mesh;
   const Eigen::Vector3f half = (0.5 * size).cast<float>();
   for (int axis = 0; axis < 3; ++axis) {
     for (int side = -1; side <= 1; side += 2) {
@@ -106,7 +106,7 @@ render::Mesh subdivided_box_mesh(const Eigen::Vector3d& size, int triangles) {
 
 struct Workload {
   datasets::Camera camera;
-  std::vector<render::Mesh> meshes;  // one per object slot
+  std::vector<datasets::Mesh> meshes;  // one per object slot
   // poses[image][object]
   std::vector<std::vector<Eigen::Isometry3d>> poses;
 };
@@ -154,7 +154,7 @@ struct BenchContext {
 
   explicit BenchContext(const Workload& workload)
       : context(render::EglContext::create()), renderer(context) {
-    for (const render::Mesh& mesh : workload.meshes) {
+    for (const datasets::Mesh& mesh : workload.meshes) {
       meshes.push_back(std::make_unique<render::GpuMesh>(render::GpuMesh::upload(mesh)));
     }
   }
@@ -317,7 +317,7 @@ void run_bench(const BenchArguments& arguments) {
   }
   const Workload workload = make_workload(arguments);
   std::size_t triangles = 0;
-  for (const render::Mesh& mesh : workload.meshes) triangles += mesh.triangle_count();
+  for (const datasets::Mesh& mesh : workload.meshes) triangles += mesh.triangle_count();
   std::printf(
       "workload: %d images x %d objects (%zu triangles per image, boxes and cylinders), "
       "%dx%d\n",

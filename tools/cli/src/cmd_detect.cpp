@@ -9,8 +9,8 @@
 #include <clutterscope/datasets/detector.hpp>
 #include <clutterscope/datasets/generator.hpp>
 #include <clutterscope/datasets/graph_inference.hpp>
+#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/render/context.hpp>
-#include <clutterscope/render/mesh.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <map>
 #include <memory>
@@ -68,7 +68,7 @@ void run_detect(const DetectArguments& arguments) {
       const int obj_id = view.objects[i].obj_id;
       auto found = meshes.find(obj_id);
       if (found == meshes.end()) {
-        const render::Mesh mesh = render::load_mesh(dataset.model(obj_id).mesh_path);
+        const datasets::Mesh mesh = datasets::load_mesh(dataset.model(obj_id).mesh_path);
         found =
             meshes.emplace(obj_id, std::make_unique<render::GpuMesh>(render::GpuMesh::upload(mesh)))
                 .first;

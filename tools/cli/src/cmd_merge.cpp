@@ -1,4 +1,6 @@
 #include <clutterscope/batch/batch.hpp>
+#include <clutterscope/scene_estimation/estimate_job.hpp>
+#include <clutterscope/visibility/visibility_job.hpp>
 #include <memory>
 #include <string>
 #include <vector>
@@ -31,6 +33,8 @@ void add_merge_command(CLI::App& app, int* exit_code) {
     batch::MergeOptions options;
     options.inputs.assign(arguments->inputs.begin(), arguments->inputs.end());
     options.out_dir = arguments->out;
+    options.outputs = {visibility::visibility_output_spec(),
+                       scene_estimation::estimate_output_spec()};
     options.quiet = arguments->quiet;
     *exit_code = batch::merge_batches(options).exit_code();
   });

@@ -29,10 +29,4 @@ void add_depth_check_options(CLI::App& command, datasets::DepthCheckOptions* opt
       "depth_scale)");
 }
 
-void add_depth_check_fingerprint(const datasets::DepthCheckOptions& options,
-                                 nlohmann::json* fingerprint) {
-  if (options.depth_scale) (*fingerprint)["depth_scale"] = *options.depth_scale;
-  if (!options.check) (*fingerprint)["depth_check"] = false;
-}
-
 }  // namespace clutterscope::cli

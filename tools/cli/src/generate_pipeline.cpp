@@ -209,14 +209,6 @@ nlohmann::json GenerateOptions::to_json() const {
   return json;
 }
 
-render::Mesh to_render_mesh(const datasets::TriangleMesh& mesh) {
-  render::Mesh out;
-  for (const auto& p : mesh.positions) out.positions.push_back(p.cast<float>());
-  for (const auto& n : mesh.normals) out.normals.push_back(n.cast<float>());
-  out.triangles = mesh.triangles;
-  return out;
-}
-
 GenerateSummary generate_dataset(const GenerateOptions& options) {
   const std::vector<datasets::CatalogueItem> catalogue = datasets::default_catalogue();
   options.validate(catalogue);
@@ -255,13 +247,13 @@ GenerateSummary write_dataset(const GenerateOptions& options,
   // Models: PLY in millimetres with normals, models_info.json, models_names.json.
   datasets::BopWriter writer(options.out);
   std::vector<datasets::ModelInfo> infos;
-  std::vector<render::Mesh> meshes;
+  std::vector<datasets::Mesh> meshes;
   for (const auto& item : catalogue) {
-    const datasets::TriangleMesh mesh = datasets::tessellate(item, options.tessellation);
+    const datasets::BasicMesh<double> mesh = datasets::tessellate(item, options.tessellation);
     const fs::path path = options.out / "models" / ("obj_" + six_digits(item.obj_id) + ".ply");
     datasets::create_folders(path.parent_path());
-    meshes.push_back(to_render_mesh(mesh));
-    render::write_ply(path, meshes.back());
+    meshes.push_back(mesh.cast<float>());
+    datasets::write_ply(path, meshes.back());
     infos.push_back(datasets::model_info(item, mesh, path));
   }
   writer.write_models_info(infos);

@@ -9,8 +9,8 @@
 #include <clutterscope/datasets/catalogue.hpp>
 #include <clutterscope/datasets/detector.hpp>
 #include <clutterscope/datasets/generator.hpp>
+#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/datasets/sensor.hpp>
-#include <clutterscope/render/mesh.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <cstdint>
 #include <filesystem>
@@ -69,8 +69,6 @@ struct GenerateSummary {
 // `out` never holds a partial or mixed dataset. A staging folder a killed run left behind is
 // removed. Throws UsageError for a non-empty `out` without `overwrite`.
 GenerateSummary generate_dataset(const GenerateOptions& options);
-
-render::Mesh to_render_mesh(const datasets::TriangleMesh& mesh);
 
 // The synthetic detector's options (--box-jitter, --score-floor, ...), shared by generate and
 // detect.

@@ -200,6 +200,9 @@ void write_box_ply(const std::filesystem::path& path, const Eigen::Vector3d& siz
 ModelInfo box_model_info(int obj_id, const Eigen::Vector3d& size_m,
                          const std::filesystem::path& mesh_path, std::string label = "");
 
+// BOP folder and file names number scenes, images and objects with six digits ("000012").
+std::string six_digits(int id);
+
 // Writes `contents` to `path` atomically (temporary file in the same folder + rename).
 // Creates missing parent folders. Throws WriteError (files.hpp) when the file cannot be written.
 void write_file_atomically(const std::filesystem::path& path, const std::string& contents);

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/datasets/scene.hpp>
 #include <cstdint>
 #include <string>
@@ -42,26 +43,21 @@ std::vector<CatalogueItem> default_catalogue();
 // Index of the item named `name` in `catalogue`, or -1.
 int find_item(const std::vector<CatalogueItem>& catalogue, const std::string& name);
 
-// Triangle mesh in metres with per-vertex normals (faces of boxes get their own vertices).
-struct TriangleMesh {
-  std::vector<Eigen::Vector3d> positions;
-  std::vector<Eigen::Vector3d> normals;
-  std::vector<std::array<std::uint32_t, 3>> triangles;
-};
-
 // Minimum and maximum accepted values of the tessellation target.
 constexpr int kMinTessellation = 12;
 constexpr int kMaxTessellation = 20000;
 
-// The item's mesh with at most about `target_triangles` triangles (never fewer than the
+// The item's mesh in metres with per-vertex normals (faces of boxes get their own vertices), in
+// double: model_info measures these exact vertices (cast<float>() gives the Mesh to write and
+// render). At most about `target_triangles` triangles (never fewer than the
 // shape's minimum: 12 for a box, 32 for a cylinder, 64 for a bottle, 60 for the tray).
 // Round shapes use a multiple of 4 segments so their bounding box equals the item's size.
 // Throws std::invalid_argument outside [kMinTessellation, kMaxTessellation].
-TriangleMesh tessellate(const CatalogueItem& item, int target_triangles);
+BasicMesh<double> tessellate(const CatalogueItem& item, int target_triangles);
 
 // BOP models_info fields of a mesh: diameter (largest vertex distance), min, size (metres).
 // mesh_path is set to `mesh_path`, label to the item's name.
-ModelInfo model_info(const CatalogueItem& item, const TriangleMesh& mesh,
+ModelInfo model_info(const CatalogueItem& item, const BasicMesh<double>& mesh,
                      const std::filesystem::path& mesh_path);
 
 }  // namespace clutterscope::datasets

@@ -1,8 +1,7 @@
 #pragma once
 
 // File helpers shared by every library: checked output primitives (each failure throws
-// WriteError, exit 4, naming the file and the system's reason), whole-file reading and the
-// six-digit ids of BOP file names.
+// WriteError, exit 4, naming the file and the system's reason) and whole-file reading.
 
 #include <filesystem>
 #include <fstream>
@@ -32,9 +31,6 @@ std::string read_file(const std::filesystem::path& path);
 // The file parsed as JSON. Throws DatasetError naming `path` when it cannot be read or is not
 // JSON: "malformed JSON (the parser's message)", followed by "; " and `remedy` when given.
 nlohmann::json read_json(const std::filesystem::path& path, const std::string& remedy = "");
-
-// BOP folder and file names number scenes, images and objects with six digits ("000012").
-std::string six_digits(int id);
 
 // The marker file `clutterscope generate` writes first into the folder it builds a dataset
 // in and removes just before renaming the complete folder into place. A dataset folder that

@@ -15,8 +15,8 @@
 // which pixels a triangle covers or their depth: both depend on window coordinates only.
 
 #include <Eigen/Core>
+#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/render/context.hpp>
-#include <clutterscope/render/mesh.hpp>
 #include <memory>
 #include <opencv2/core.hpp>
 
@@ -26,7 +26,7 @@ namespace clutterscope::render {
 // scale_to_metres = 1 for BOP's millimetres). Move-only; needs a current context.
 class BopModel {
  public:
-  static BopModel upload(const Mesh& mesh);
+  static BopModel upload(const datasets::Mesh& mesh);
   BopModel(BopModel&&) noexcept;
   BopModel& operator=(BopModel&&) noexcept;
   BopModel(const BopModel&) = delete;

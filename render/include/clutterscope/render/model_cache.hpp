@@ -6,8 +6,8 @@
 // used only while that thread's EglContext is current.
 
 #include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/datasets/scene.hpp>
-#include <clutterscope/render/mesh.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <cstddef>
 #include <map>
@@ -19,16 +19,16 @@ namespace clutterscope::render {
 
 struct ModelCacheOptions {
   // > 0: proxy() returns the mesh decimated to at most this many triangles, and further while
-  // within proxy_tolerance_m (see DecimateOptions). 0: no proxies.
+  // within proxy_tolerance_m (see datasets::DecimateOptions). 0: no proxies.
   std::size_t proxy_triangles = 0;
-  double proxy_tolerance_m = DecimateOptions{}.tolerance_m;
+  double proxy_tolerance_m = datasets::DecimateOptions{}.tolerance_m;
   // Keep the CPU meshes (metres) for cpu_mesh(), e.g. model points for ICP.
   bool keep_cpu_meshes = false;
   // Multiplies model file coordinates to get metres (BOP: millimetres).
   double scale_to_metres = 0.001;
   bool IsValid(std::string* why) const;
   // How proxy() decimates (proxy_triangles > 0).
-  DecimateOptions proxy_decimation() const;
+  datasets::DecimateOptions proxy_decimation() const;
 };
 
 class ModelCache {
@@ -47,7 +47,7 @@ class ModelCache {
   // The decimated proxy (ModelCacheOptions::proxy_triangles must be > 0).
   const GpuMesh& proxy(int obj_id);
   // The CPU mesh in metres (ModelCacheOptions::keep_cpu_meshes must be set).
-  const Mesh& cpu_mesh(int obj_id);
+  const datasets::Mesh& cpu_mesh(int obj_id);
 
   std::size_t loaded_count() const;  // models loaded so far
 

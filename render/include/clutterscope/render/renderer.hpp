@@ -5,9 +5,9 @@
 // by the Renderer; a Renderer belongs to the thread whose EglContext is current.
 
 #include <Eigen/Geometry>
+#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/datasets/scene.hpp>
 #include <clutterscope/render/context.hpp>
-#include <clutterscope/render/mesh.hpp>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -45,7 +45,7 @@ struct Intrinsics {
 // A mesh uploaded to the GPU of the current context. Move-only.
 class GpuMesh {
  public:
-  static GpuMesh upload(const Mesh& mesh);  // needs a current context
+  static GpuMesh upload(const datasets::Mesh& mesh);  // needs a current context
   GpuMesh(GpuMesh&&) noexcept;
   GpuMesh& operator=(GpuMesh&&) noexcept;
   GpuMesh(const GpuMesh&) = delete;

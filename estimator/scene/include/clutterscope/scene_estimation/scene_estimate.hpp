@@ -74,9 +74,9 @@ struct EstimateOptions {
   double unary_truncation_m = 0.04;
   int grid_pixels = 32;
   // Decimated models for scoring: at most proxy_triangles, fewer while the surface stays within
-  // proxy_tolerance_m (render::DecimateOptions; boxes become 12 triangles).
+  // proxy_tolerance_m (datasets::DecimateOptions; boxes become 12 triangles).
   int proxy_triangles = 200;
-  double proxy_tolerance_m = render::DecimateOptions{}.tolerance_m;
+  double proxy_tolerance_m = datasets::DecimateOptions{}.tolerance_m;
   // ICP ignores observed points farther than this from the model: short, so that each fit stays
   // in the basin of its belief sample and the spread of the K fits reflects the belief's (with
   // 2 cm, fits of barely visible objects slid together onto occluders: confident and wrong; with

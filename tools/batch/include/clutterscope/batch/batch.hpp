@@ -68,9 +68,16 @@ struct ItemOutput {
   // Small per-item JSON handed to the SummaryBuilder in item order (per-image statistics).
   nlohmann::json summary = nlohmann::json::object();
   // Extra files the item wrote under OUT (relative paths, e.g. "masks/..png"); merge copies
-  // them from shard folders. Write them atomically (datasets::write_file_atomically).
+  // them from shard folders. Write them with write_output_file.
   std::vector<std::string> files;
 };
+
+// Writes OUT/relative (an ItemOutput file, or a per-scene file of a SummaryBuilder) atomically
+// through a temporary file under OUT/.batch/tmp/, so that a run killed mid-write leaves no stray
+// file among the outputs (the rename is atomic: same folder tree, same file system). Creates
+// the missing folders; throws datasets::WriteError.
+void write_output_file(const std::filesystem::path& out_dir, const std::filesystem::path& relative,
+                       const std::string& bytes);
 
 // The per-item function of one worker; it owns the worker's state (render context, caches).
 using ItemFunction = std::function<ItemOutput(const datasets::ImageKey&)>;
@@ -112,8 +119,8 @@ class SummaryBuilder {
   virtual nlohmann::json finish(const BatchTotals& totals) = 0;
 };
 
-// Everything needed to assemble a command's final files; registered once per command so that
-// `clutterscope merge` can finalize shards of any batch command.
+// Everything needed to assemble a command's final files: the runner's and, listed in
+// MergeOptions::outputs, `clutterscope merge`'s for shards of that command.
 struct BatchOutputSpec {
   std::string command;  // e.g. "visibility"; also recorded in the fingerprint
   std::vector<TableSpec> tables;
@@ -123,12 +130,6 @@ struct BatchOutputSpec {
                                                 const std::filesystem::path& out_dir)>
       make_summary;
 };
-
-// Registers a command's output spec (call it from add_<command>_command). Re-registering the
-// same command replaces the spec.
-void register_batch_output(BatchOutputSpec spec);
-// nullptr when no command of that name registered.
-const BatchOutputSpec* find_batch_output(const std::string& command);
 
 struct Shard {
   int index = 0;  // 0-based
@@ -151,7 +152,7 @@ struct BatchOptions {
 };
 
 struct BatchJob {
-  const BatchOutputSpec* output = nullptr;  // from find_batch_output / the registered spec
+  const BatchOutputSpec* output = nullptr;  // the command's outputs; must outlive run_batch
   std::vector<datasets::ImageKey> items;    // the whole job, sorted and unique (all shards)
   // Options that change results (dataset path, mode, delta, seed...). The runner adds the
   // command, the tool version and a hash of the item list. Key order is irrelevant.
@@ -184,6 +185,9 @@ BatchResult run_batch(const BatchJob& job, const BatchOptions& options);
 struct MergeOptions {
   std::vector<std::filesystem::path> inputs;  // shard folders (may include out_dir)
   std::filesystem::path out_dir;
+  // The outputs of the batch commands this merge knows (the front end lists them); a folder
+  // of any other command is refused.
+  std::vector<BatchOutputSpec> outputs;
   bool quiet = false;
 };
 // Combines shard folders of one job into the final files of OUT, byte-identical to one

@@ -1,81 +1,29 @@
 #pragma once
 
-// The options every per-image batch command shares: DATASET, --split, --split-type,
-// --models-dir, --targets, --scenes, --images, --out, --jobs, --shard, --keep-going, --quiet.
-// Malformed values are CLI11 validation errors (exit 2) raised while parsing, with a message naming
-// the option.
+// The command-line registration of the options every per-image batch command shares: DATASET,
+// --split, --split-type, --models-dir, --targets, --scenes, --images, --out, --jobs, --shard,
+// --keep-going, --quiet. Malformed values are CLI11 validation errors (exit 2) raised while
+// parsing, with a message naming the option. The options themselves, the selection and the
+// fingerprint are batch's (batch/dataset_selection.hpp), so that jobs take them without CLI11.
 
 #include <CLI/CLI.hpp>
-#include <clutterscope/batch/batch.hpp>
-#include <clutterscope/datasets/bop.hpp>
-#include <filesystem>
-#include <string>
-#include <vector>
+#include <clutterscope/batch/dataset_selection.hpp>
 
 namespace clutterscope::cli {
 
-struct DatasetOptions {
-  std::string dataset;  // DATASET positional: a BOP dataset folder
-  std::string split = "test";
-  std::string scenes;  // "1,2,5-7"; empty = all
-  std::string images;  // same syntax; empty = all
-  std::string out;     // --out DIR
-  int jobs = 0;        // 0 until parsed: the default is the number of cores
-  std::string shard;   // "i/n"; empty = whole job
-  bool keep_going = false;
-  bool quiet = false;
-  std::string models_dir = "models";  // --models-dir NAME (models_eval, models_cad, ...)
-  std::string split_type;             // --split-type TYPE: folder SPLIT_TYPE, camera_TYPE.json
-  std::string targets;                // --targets FILE: test_targets_bop19/bop24.json
-};
+using batch::batch_options_of;
+using batch::dataset_fingerprint;
+using batch::DatasetOptions;
+using batch::format_id_list;
+using batch::input_checks_of;
+using batch::InputCheckTotals;
+using batch::open_dataset;
+using batch::parse_id_list;
+using batch::selection_of;
+using batch::split_folder;
+using batch::warn_if_more_jobs_than_cores;
 
 // Adds the shared options to a subcommand. `options` must outlive parsing.
 void add_dataset_options(CLI::App& command, DatasetOptions* options);
-
-// Parses "1,2,5-7" into sorted unique ids. Throws UsageError naming `option` when malformed.
-std::vector<int> parse_id_list(const std::string& text, const std::string& option);
-
-// The canonical text of sorted unique ids: {1, 2, 5, 6, 7} -> "1,2,5-7" ("" = all).
-std::string format_id_list(const std::vector<int>& ids);
-
-// The split folder of the options: SPLIT, or SPLIT_TYPE with --split-type.
-std::string split_folder(const DatasetOptions& options);
-
-// The dataset selection (one split folder, scene and image ids) of the options.
-datasets::DatasetSelection selection_of(const DatasetOptions& options);
-
-// Opens the dataset with --models-dir and --split-type, and attaches --targets when given.
-// Throws DatasetError for a bad dataset or targets file, UsageError for a bad folder name.
-datasets::BopDataset open_dataset(const DatasetOptions& options);
-
-// Input checks of one image, for its persisted per-image summary: how many GT rotations are
-// further than kRotationReportThreshold from orthonormal, and the largest error.
-nlohmann::json input_checks_of(const datasets::SceneView& view);
-
-// Sums input_checks_of over the images of a batch, for summary.json: order-independent, so
-// byte-stable across --jobs, resume and merge.
-class InputCheckTotals {
- public:
-  void add(const nlohmann::json& image_checks);
-  nlohmann::json to_json() const;
-
- private:
-  std::int64_t rotations_off_orthonormal_ = 0;
-  double max_rotation_error_ = 0.0;
-};
-
-// One line on stderr, once per process, when `jobs` exceeds the machine's cores (the run goes
-// on: threads beyond the cores only compete for them).
-void warn_if_more_jobs_than_cores(int jobs);
-
-// Batch options (out, jobs, shard, keep-going, quiet) of the options; warns as
-// warn_if_more_jobs_than_cores does.
-batch::BatchOptions batch_options_of(const DatasetOptions& options, const std::string& label);
-
-// The fingerprint entries every dataset command shares: absolute dataset path, split, and the
-// canonical scene and image id lists (format_id_list); split_type, models_dir and the absolute
-// targets path only where given (so fingerprints of runs without them are unchanged). Commands add
-// their own result-changing options to it.
-nlohmann::json dataset_fingerprint(const DatasetOptions& options);
 
 }  // namespace clutterscope::cli

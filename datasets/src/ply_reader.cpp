@@ -13,7 +13,7 @@
 
 #include "mesh_checks.hpp"
 
-namespace clutterscope::render::detail {
+namespace clutterscope::datasets::detail {
 
 namespace {
 
@@ -76,9 +76,7 @@ class PlyParser {
   PlyParser(const std::filesystem::path& path, std::string_view bytes)
       : path_(path), bytes_(bytes) {}
 
-  [[noreturn]] void fail(const std::string& what) const {
-    throw datasets::DatasetError(path_, what);
-  }
+  [[noreturn]] void fail(const std::string& what) const { throw DatasetError(path_, what); }
 
   Header parse_header() {
     Header header;
@@ -652,4 +650,4 @@ Mesh read_ply(const std::filesystem::path& path, std::string_view bytes, float s
   return mesh;
 }
 
-}  // namespace clutterscope::render::detail
+}  // namespace clutterscope::datasets::detail

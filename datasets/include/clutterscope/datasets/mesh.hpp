@@ -1,6 +1,7 @@
 #pragma once
 
-// CPU-side triangle meshes. Loading needs no GL context; upload is a separate step (GpuMesh).
+// CPU-side triangle meshes: loading (assimp and hardened PLY, OBJ and STL checks), welding,
+// quadric decimation and PLY writing. No GL: render::GpuMesh uploads a Mesh.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -10,17 +11,39 @@
 #include <string>
 #include <vector>
 
-namespace clutterscope::render {
+namespace clutterscope::datasets {
 
-// Plain triangle mesh in metres, model frame.
-struct Mesh {
-  std::vector<Eigen::Vector3f> positions;
-  std::vector<Eigen::Vector3f> normals;  // per vertex, may be empty
+// Plain triangle mesh in metres, model frame. One type for every CPU mesh: Mesh (float) is
+// what models load into, the GPU renders and PLY files hold; the catalogue tessellates in
+// double (BasicMesh<double>, see catalogue.hpp), since models_info.json is computed from the
+// exact vertices, and cast<float>() gives the Mesh written and rendered.
+template <typename Scalar>
+struct BasicMesh {
+  using Vector3 = Eigen::Matrix<Scalar, 3, 1>;
+  std::vector<Vector3> positions;
+  std::vector<Vector3> normals;  // per vertex, may be empty
   std::vector<std::array<std::uint32_t, 3>> triangles;
 
   std::size_t triangle_count() const { return triangles.size(); }
-  Eigen::AlignedBox3f bounds() const;
+  Eigen::AlignedBox<Scalar, 3> bounds() const {
+    Eigen::AlignedBox<Scalar, 3> box;
+    for (const auto& p : positions) box.extend(p);
+    return box;
+  }
+  // The same mesh with each coordinate converted to `To`.
+  template <typename To>
+  BasicMesh<To> cast() const {
+    BasicMesh<To> out;
+    out.positions.reserve(positions.size());
+    for (const auto& p : positions) out.positions.push_back(p.template cast<To>());
+    out.normals.reserve(normals.size());
+    for (const auto& n : normals) out.normals.push_back(n.template cast<To>());
+    out.triangles = triangles;
+    return out;
+  }
 };
+
+using Mesh = BasicMesh<float>;
 
 struct MeshLoadOptions {
   // Multiplies file coordinates to get metres. BOP models are millimetres: 0.001.
@@ -33,7 +56,7 @@ struct MeshLoadOptions {
 // finite coordinates; the same mesh as assimp for valid files). OBJ and STL are checked before
 // assimp parses them (OBJ: bounded lines, finite vertices, every face index in range; STL:
 // binary size 84 + 50 n, or well-formed ASCII facets); other formats go to assimp as they are,
-// with its data-structure validation. Throws datasets::DatasetError naming the file (and the
+// with its data-structure validation. Throws DatasetError naming the file (and the
 // element, record or line) for a missing, unreadable, empty or malformed model.
 Mesh load_mesh(const std::filesystem::path& path, const MeshLoadOptions& options = {});
 
@@ -97,4 +120,4 @@ Mesh box_mesh(const Eigen::Vector3f& size, int subdivisions = 1);
 void write_ply(const std::filesystem::path& path, const Mesh& mesh,
                double scale_from_metres = 1000.0);
 
-}  // namespace clutterscope::render
+}  // namespace clutterscope::datasets

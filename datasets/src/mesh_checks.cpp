@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace clutterscope::render::detail {
+namespace clutterscope::datasets::detail {
 
 namespace {
 
@@ -21,8 +21,8 @@ void for_each_line(const std::filesystem::path& path, std::string_view bytes, Vi
     if (end == std::string_view::npos) end = bytes.size();
     std::string_view line = bytes.substr(offset, end - offset);
     if (line.size() > kMaxTextLine) {
-      throw datasets::DatasetError(path, "line " + std::to_string(number) + ": longer than " +
-                                             std::to_string(kMaxTextLine) + " characters");
+      throw DatasetError(path, "line " + std::to_string(number) + ": longer than " +
+                                   std::to_string(kMaxTextLine) + " characters");
     }
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     visit(number, line);
@@ -60,12 +60,11 @@ void check_obj(const std::filesystem::path& path, std::string_view bytes) {
     const std::string where = "line " + std::to_string(number) + ": ";
     if (tokens[0] == "v") {
       if (tokens.size() < 4)
-        throw datasets::DatasetError(path, where + "vertex with fewer than 3 coordinates");
+        throw DatasetError(path, where + "vertex with fewer than 3 coordinates");
       for (std::size_t k = 1; k < tokens.size(); ++k) {
         if (!finite_number(tokens[k])) {
-          throw datasets::DatasetError(
-              path,
-              where + "vertex coordinate '" + std::string(tokens[k]) + "' is not a finite number");
+          throw DatasetError(path, where + "vertex coordinate '" + std::string(tokens[k]) +
+                                       "' is not a finite number");
         }
       }
       ++totals[0];
@@ -97,15 +96,15 @@ void check_obj(const std::filesystem::path& path, std::string_view bytes) {
         std::int64_t index = 0;
         const auto [ptr, ec] = std::from_chars(field.data(), field.data() + field.size(), index);
         if (ec != std::errc() || ptr != field.data() + field.size() || index == 0) {
-          throw datasets::DatasetError(
-              path, where + "'" + std::string(tokens[k]) + "' is not a valid face corner");
+          throw DatasetError(path,
+                             where + "'" + std::string(tokens[k]) + "' is not a valid face corner");
         }
         const std::int64_t resolved = index < 0 ? seen[slot] + index + 1 : index;
         if (resolved < 1 || resolved > totals[slot]) {
-          throw datasets::DatasetError(
-              path, where + kinds[slot] + " index " + std::to_string(index) + " out of range (" +
-                        std::to_string(index < 0 ? seen[slot] : totals[slot]) + " " +
-                        plurals[slot] + ")");
+          throw DatasetError(path, where + kinds[slot] + " index " + std::to_string(index) +
+                                       " out of range (" +
+                                       std::to_string(index < 0 ? seen[slot] : totals[slot]) + " " +
+                                       plurals[slot] + ")");
         }
       }
     }
@@ -128,7 +127,7 @@ void check_stl(const std::filesystem::path& path, std::string_view bytes) {
       expected = std::to_string(84 + 50 * std::uint64_t{triangles}) + " (84 + 50 x " +
                  std::to_string(triangles) + " triangles)";
     }
-    throw datasets::DatasetError(
+    throw DatasetError(
         path, "binary STL of " + std::to_string(bytes.size()) + " bytes, expected " + expected);
   }
   int vertices_in_facet = -1;  // -1: outside a facet
@@ -139,51 +138,46 @@ void check_stl(const std::filesystem::path& path, std::string_view bytes) {
     // assimp's ASCII STL importer leaks or misreads what strays from this grammar (a fuzzed
     // "facet ;normal" leaked its mesh), so every line must be one of the format's keywords.
     if (tokens[0] == "facet") {
-      if (vertices_in_facet >= 0)
-        throw datasets::DatasetError(path, where + "facet inside a facet");
+      if (vertices_in_facet >= 0) throw DatasetError(path, where + "facet inside a facet");
       if (tokens.size() != 5 || tokens[1] != "normal")
-        throw datasets::DatasetError(path, where + "expected 'facet normal nx ny nz'");
+        throw DatasetError(path, where + "expected 'facet normal nx ny nz'");
       for (std::size_t k = 2; k < 5; ++k) {
         if (!finite_number(tokens[k])) {
-          throw datasets::DatasetError(
+          throw DatasetError(
               path, where + "facet normal '" + std::string(tokens[k]) + "' is not a finite number");
         }
       }
       vertices_in_facet = 0;
     } else if (tokens[0] == "outer" || tokens[0] == "endloop") {
       if (vertices_in_facet < 0)
-        throw datasets::DatasetError(path, where + std::string(tokens[0]) + " outside a facet");
+        throw DatasetError(path, where + std::string(tokens[0]) + " outside a facet");
       if (tokens[0] == "outer" && (tokens.size() != 2 || tokens[1] != "loop"))
-        throw datasets::DatasetError(path, where + "expected 'outer loop'");
+        throw DatasetError(path, where + "expected 'outer loop'");
     } else if (tokens[0] == "solid" || tokens[0] == "endsolid") {
       if (vertices_in_facet >= 0)
-        throw datasets::DatasetError(path, where + std::string(tokens[0]) + " inside a facet");
+        throw DatasetError(path, where + std::string(tokens[0]) + " inside a facet");
     } else if (tokens[0] == "vertex") {
-      if (tokens.size() != 4)
-        throw datasets::DatasetError(path, where + "vertex needs 3 coordinates");
+      if (tokens.size() != 4) throw DatasetError(path, where + "vertex needs 3 coordinates");
       for (std::size_t k = 1; k < 4; ++k) {
         if (!finite_number(tokens[k])) {
-          throw datasets::DatasetError(
-              path,
-              where + "vertex coordinate '" + std::string(tokens[k]) + "' is not a finite number");
+          throw DatasetError(path, where + "vertex coordinate '" + std::string(tokens[k]) +
+                                       "' is not a finite number");
         }
       }
-      if (vertices_in_facet < 0)
-        throw datasets::DatasetError(path, where + "vertex outside a facet");
+      if (vertices_in_facet < 0) throw DatasetError(path, where + "vertex outside a facet");
       ++vertices_in_facet;
     } else if (tokens[0] == "endfacet") {
       if (vertices_in_facet != 3) {
-        throw datasets::DatasetError(
-            path,
-            where + "facet with " + std::to_string(vertices_in_facet) + " vertices, expected 3");
+        throw DatasetError(path, where + "facet with " + std::to_string(vertices_in_facet) +
+                                     " vertices, expected 3");
       }
       vertices_in_facet = -1;
     } else {
-      throw datasets::DatasetError(
-          path, where + "'" + std::string(tokens[0]) + "' is not a keyword of ASCII STL");
+      throw DatasetError(path,
+                         where + "'" + std::string(tokens[0]) + "' is not a keyword of ASCII STL");
     }
   });
-  if (vertices_in_facet >= 0) throw datasets::DatasetError(path, "file ends inside a facet");
+  if (vertices_in_facet >= 0) throw DatasetError(path, "file ends inside a facet");
 }
 
-}  // namespace clutterscope::render::detail
+}  // namespace clutterscope::datasets::detail

@@ -7,7 +7,7 @@
 #include <assimp/Importer.hpp>
 #include <chrono>
 #include <clutterscope/datasets/errors.hpp>
-#include <clutterscope/render/mesh.hpp>
+#include <clutterscope/datasets/mesh.hpp>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -20,9 +20,9 @@
 // The hardened PLY reader behind load_mesh: hand-written small files with known results, the
 // malformed files that crashed or hung assimp, and agreement with assimp on valid files.
 
-#include "render/mesh_file_fixture.hpp"
+#include "datasets/mesh_file_fixture.hpp"
 
-namespace clutterscope::render {
+namespace clutterscope::datasets {
 namespace {
 
 namespace fs = std::filesystem;
@@ -34,7 +34,7 @@ class PlyFiles : public MeshFileTest {
     const fs::path path = write("bad.ply", contents);
     try {
       load_mesh(path, {1.0});
-    } catch (const datasets::DatasetError& error) {
+    } catch (const DatasetError& error) {
       EXPECT_EQ(error.file(), path);
       return error.what();
     }
@@ -426,4 +426,4 @@ TEST_F(PlyFiles, SameMeshAsAssimpForPolygonsLinesAndGeneratedNormals) {
 }
 
 }  // namespace
-}  // namespace clutterscope::render
+}  // namespace clutterscope::datasets

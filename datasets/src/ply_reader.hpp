@@ -1,12 +1,12 @@
 #pragma once
 
-// The hardened PLY reader behind load_mesh (internal to the render library).
+// The hardened PLY reader behind load_mesh (internal to the datasets library).
 
-#include <clutterscope/render/mesh.hpp>
+#include <clutterscope/datasets/mesh.hpp>
 #include <filesystem>
 #include <string_view>
 
-namespace clutterscope::render::detail {
+namespace clutterscope::datasets::detail {
 
 // True when `bytes` start with the PLY magic line ("ply" then a line break).
 bool is_ply(std::string_view bytes);
@@ -28,7 +28,7 @@ inline constexpr std::size_t kPlyMaxHeaderBytes = 1 << 20;
 // holds polygons; convex polygons of 5 and more vertices are fanned from their first vertex
 // (assimp ear-cuts them, which splits the same polygon along other diagonals), concave ones
 // are refused. Coordinates are multiplied by `scale` (in float, as after assimp). Every error
-// is a datasets::DatasetError naming `path` and the element, record and property.
+// is a DatasetError naming `path` and the element, record and property.
 Mesh read_ply(const std::filesystem::path& path, std::string_view bytes, float scale);
 
-}  // namespace clutterscope::render::detail
+}  // namespace clutterscope::datasets::detail

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <clutterscope/datasets/errors.hpp>
-#include <clutterscope/render/mesh.hpp>
+#include <clutterscope/datasets/mesh.hpp>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -15,9 +15,9 @@
 #include <random>
 #include <string>
 
-#include "render/mesh_file_fixture.hpp"
+#include "datasets/mesh_file_fixture.hpp"
 
-namespace clutterscope::render {
+namespace clutterscope::datasets {
 namespace {
 
 namespace fs = std::filesystem;
@@ -91,7 +91,7 @@ TEST_F(MeshFiles, MalformedObjAndStlAreRefusedBeforeAssimp) {
   const auto message_of = [&](const std::string& name, const std::string& contents) {
     try {
       load_mesh(write(name, contents));
-    } catch (const datasets::DatasetError& error) {
+    } catch (const DatasetError& error) {
       EXPECT_EQ(error.file(), dir_ / name);
       return std::string(error.what());
     }
@@ -198,7 +198,7 @@ TEST_F(MeshFiles, MissingFileIsDatasetErrorNamingIt) {
   try {
     load_mesh(path);
     FAIL() << "no exception";
-  } catch (const datasets::DatasetError& error) {
+  } catch (const DatasetError& error) {
     EXPECT_EQ(error.file(), path);
     EXPECT_NE(std::string(error.what()).find("obj_000007.ply"), std::string::npos);
     EXPECT_NE(std::string(error.what()).find("not found"), std::string::npos);
@@ -210,14 +210,13 @@ TEST_F(MeshFiles, EmptyFileIsDatasetError) {
   try {
     load_mesh(path);
     FAIL() << "no exception";
-  } catch (const datasets::DatasetError& error) {
+  } catch (const DatasetError& error) {
     EXPECT_NE(std::string(error.what()).find("empty"), std::string::npos) << error.what();
   }
 }
 
 TEST_F(MeshFiles, GarbageFileIsDatasetError) {
-  EXPECT_THROW(load_mesh(write("garbage.ply", "this is not a mesh\n\x01\x02")),
-               datasets::DatasetError);
+  EXPECT_THROW(load_mesh(write("garbage.ply", "this is not a mesh\n\x01\x02")), DatasetError);
 }
 
 TEST_F(MeshFiles, PointCloudWithoutFacesIsDatasetError) {
@@ -225,7 +224,7 @@ TEST_F(MeshFiles, PointCloudWithoutFacesIsDatasetError) {
       write("points.ply",
             "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
             "property float y\nproperty float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n");
-  EXPECT_THROW(load_mesh(path), datasets::DatasetError);
+  EXPECT_THROW(load_mesh(path), DatasetError);
 }
 
 TEST_F(MeshFiles, WritePlyRoundTripsInMillimetresWithBopHeader) {
@@ -577,4 +576,4 @@ TEST(Decimate, RejectsInvalidOptions) {
 }
 
 }  // namespace
-}  // namespace clutterscope::render
+}  // namespace clutterscope::datasets

@@ -9,7 +9,7 @@
 #include <fstream>
 #include <string>
 
-namespace clutterscope::render {
+namespace clutterscope::datasets {
 
 class MeshFileTest : public ::testing::Test {
  protected:
@@ -29,4 +29,4 @@ class MeshFileTest : public ::testing::Test {
   std::filesystem::path dir_;
 };
 
-}  // namespace clutterscope::render
+}  // namespace clutterscope::datasets

@@ -1,0 +1,34 @@
+#pragma once
+
+// The per-image estimate job that `clutterscope estimate` (and the report's estimate step)
+// runs on the batch runner: NBP scene estimation (paper §III) of every image of a BOP dataset,
+// resumable, shardable, on --jobs workers. Writes estimates.csv, results_bop.csv, summary.json
+// and, with save_beliefs, beliefs/SPLIT/SCENE/IMID.csv (the belief samples of every iteration).
+
+#include <clutterscope/batch/batch.hpp>
+#include <clutterscope/batch/dataset_selection.hpp>
+#include <clutterscope/scene_estimation/scene_estimate.hpp>
+#include <string>
+
+namespace clutterscope::scene_estimation {
+
+// Everything the `estimate` command's flags set.
+struct EstimateJobOptions {
+  batch::DatasetOptions dataset;
+  // The estimator's options; keep_history is set from save_beliefs by the job.
+  EstimateOptions estimate;
+  std::string detections;     // BOP 2D detections JSON; empty: the synthetic detector
+  bool save_beliefs = false;  // also write the belief samples of every iteration
+  bool no_time = false;       // times left empty / -1, so every output is byte-reproducible
+  bool IsValid(std::string* why) const;
+};
+
+// The tables and the summary builder of the job's output, for the runner and for `merge`.
+batch::BatchOutputSpec estimate_output_spec();
+
+// Runs (or resumes) the job into options.dataset.out. Throws batch::UsageError for invalid
+// options, datasets::DatasetError for bad data (see batch::run_batch), render::RenderError.
+// Creates the render::WorkerRasterisationScope its workers need.
+batch::BatchResult run_estimate_job(const EstimateJobOptions& options);
+
+}  // namespace clutterscope::scene_estimation

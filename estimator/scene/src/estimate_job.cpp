@@ -1,0 +1,380 @@
+#include <algorithm>
+#include <clutterscope/batch/formats.hpp>
+#include <clutterscope/batch/input_digest.hpp>
+#include <clutterscope/batch/table_layouts.hpp>
+#include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/render/context.hpp>
+#include <clutterscope/report/calibration.hpp>
+#include <clutterscope/scene_estimation/estimate_job.hpp>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace clutterscope::scene_estimation {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+class EstimateWorker {
+ public:
+  EstimateWorker(const datasets::BopDataset& dataset, const EstimateJobOptions& job)
+      : job_(job), dataset_(dataset), estimator_(dataset, job.estimate) {}
+
+  batch::ItemOutput run(const datasets::ImageKey& key) {
+    const datasets::SceneView view = dataset_.load(key);
+    const ViewEstimate result = estimator_.estimate(view);
+    const double time_ms = 1e3 * result.time_total.count();
+    batch::ItemOutput output;
+    std::string rows, bop_rows, beliefs;
+    nlohmann::json objects = nlohmann::json::array();
+    for (const ObjectEstimate& object : result.objects) {
+      // bop19 targets: every instance takes part in the scene, only targets are reported.
+      if (view.target_gt &&
+          !std::binary_search(view.target_gt->begin(), view.target_gt->end(), object.gt_id)) {
+        continue;
+      }
+      const bool ok = object.failure.empty();
+      // The 95%-ellipsoid decision, with --confidence-radius-cm only.
+      std::optional<bool> confident_radius;
+      if (ok && job_.estimate.confidence_radius_cm) {
+        confident_radius = confident_at_radius(object, *job_.estimate.confidence_radius_cm);
+      }
+      batch::CsvRow row;
+      row.add(key.split).add(key.scene_id).add(key.im_id).add(object.gt_id).add(object.obj_id);
+      row.add(object.label);
+      if (ok) {
+        for (int a = 0; a < 3; ++a) row.add(1e3 * object.position[a], 3);
+        // Significant digits, not fixed decimals: a variance of 1e-7 cm^2 must not read as 0,
+        // whose log the report cannot take.
+        for (int a = 0; a < 3; ++a) row.add(batch::format_general(1e4 * object.variance[a], 6));
+        row.add(object.confident ? "1" : "0");
+        row.add(100 * *object.error_m, 4).add(100 * *object.initial_error_m, 4);
+        for (int a = 0; a < 3; ++a) row.add(100 * (*object.error_support_m)[a], 4);
+        row.add(batch::format_general(*object.nees, 6));  // empty when not finite (a zero variance)
+        row.add(batch::format_general(report::radius95_cm(1e4 * object.variance.maxCoeff()), 6));
+        row.add(!confident_radius ? "" : *confident_radius ? "1" : "0");
+        row.add(object.effective_sample_size, 2);
+        if (object.seen_through) {
+          row.add(*object.seen_through, 4);
+        } else {
+          row.add("");
+        }
+        row.add(object.belief_shift ? batch::format_general(*object.belief_shift, 6) : "");
+        row.add(object.consistent ? "1" : "0");
+      } else {
+        for (int column = 0; column < 19; ++column) row.add("");  // x_mm .. consistent
+      }
+      if (job_.no_time) {
+        row.add("");
+      } else {
+        row.add(time_ms, 1);
+      }
+      rows += row.str();
+      nlohmann::json entry = {{"gt_id", object.gt_id}, {"obj_id", object.obj_id}};
+      entry["visibility"] =
+          object.visibility ? batch::json_rounded(*object.visibility, 4) : nullptr;
+      if (ok) {
+        entry["confident"] = object.confident;
+        entry["err_cm"] = batch::json_rounded(100 * *object.error_m, 4);
+        entry["max_var_cm2"] = batch::json_rounded(1e4 * object.variance.maxCoeff(), 6);
+        // Calibration (summary.json): a non-finite NEES (a zero variance) is left out.
+        if (report::usable_nees(object.nees)) entry["nees"] = *object.nees;
+        entry["ess_min"] = object.effective_sample_size;
+        if (confident_radius) entry["confident_radius"] = *confident_radius;
+        const double threshold = job_.estimate.variance_threshold_cm2;
+        const double score = std::exp(-1e4 * object.variance.maxCoeff() / threshold);
+        batch::CsvRow bop;
+        bop.add(key.scene_id).add(key.im_id).add(object.obj_id).add(score, 6);
+        std::string rotation, translation;
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c)
+            rotation +=
+                (rotation.empty() ? "" : " ") + batch::format_general(object.rotation(r, c), 9);
+        for (int a = 0; a < 3; ++a)
+          translation += (translation.empty() ? "" : " ") +
+                         batch::format_general(1e3 * object.model_translation[a], 9);
+        bop.add(rotation).add(translation);
+        if (job_.no_time) {
+          bop.add("-1");
+        } else {
+          bop.add(result.time_total.count(), 4);
+        }
+        bop_rows += bop.str();
+      } else {
+        entry["failure"] = object.failure;
+      }
+      objects.push_back(entry);
+      for (std::size_t iteration = 0; iteration < object.beliefs.size(); ++iteration) {
+        for (const BeliefSample& sample : object.beliefs[iteration]) {
+          batch::CsvRow belief;
+          belief.add(object.gt_id).add(object.obj_id).add(static_cast<int>(iteration + 1));
+          for (int a = 0; a < 3; ++a) belief.add(1e3 * sample.position[a], 3);
+          belief.add(sample.weight, 8);
+          beliefs += belief.str();
+        }
+      }
+    }
+    output.tables = {rows, bop_rows};
+    output.summary = {{"objects", objects},
+                      {"image_failures", result.image_failures},
+                      {"graph_inferred", result.graph_inferred},
+                      {"gravity_source", result.gravity_source},
+                      {"observation", result.observation},
+                      {"detections", result.detections},
+                      {"input_checks", batch::input_checks_of(view)}};
+    if (job_.save_beliefs) {
+      const fs::path relative = fs::path("beliefs") / key.split /
+                                datasets::six_digits(key.scene_id) /
+                                (datasets::six_digits(key.im_id) + ".csv");
+      batch::write_output_file(job_.dataset.out, relative,
+                               batch::belief_samples_table().header() + "\n" + beliefs);
+      output.files.push_back(relative.generic_string());
+    }
+    return output;
+  }
+
+ private:
+  const EstimateJobOptions& job_;
+  const datasets::BopDataset& dataset_;
+  SceneEstimator estimator_;
+};
+
+double median(std::vector<double> values) {
+  if (values.empty()) return std::nan("");
+  std::sort(values.begin(), values.end());
+  const std::size_t middle = values.size() / 2;
+  return values.size() % 2 ? values[middle] : 0.5 * (values[middle - 1] + values[middle]);
+}
+
+// Accuracy over all objects (the paper's and the measures), object failures listed.
+class EstimateSummary : public batch::SummaryBuilder {
+ public:
+  explicit EstimateSummary(nlohmann::json fingerprint) : fingerprint_(std::move(fingerprint)) {}
+
+  void add(const batch::ItemRecord& record) override {
+    if (!record.ok) return;
+    ++images_;
+    if (record.summary.at("graph_inferred").get<bool>()) ++graphs_inferred_;
+    if (record.summary.at("observation") == "synthetic") ++synthetic_observations_;
+    if (record.summary.at("detections") == "synthetic") ++synthetic_detections_;
+    input_checks_.add(record.summary.at("input_checks"));
+    for (const auto& message : record.summary.at("image_failures")) {
+      image_failures_.push_back({{"split", record.key.split},
+                                 {"scene_id", record.key.scene_id},
+                                 {"im_id", record.key.im_id},
+                                 {"error", message}});
+    }
+    for (const nlohmann::json& object : record.summary.at("objects")) {
+      ++objects_;
+      if (object.contains("failure")) {
+        object_failures_.push_back({{"split", record.key.split},
+                                    {"scene_id", record.key.scene_id},
+                                    {"im_id", record.key.im_id},
+                                    {"gt_id", object.at("gt_id")},
+                                    {"obj_id", object.at("obj_id")},
+                                    {"failure", object.at("failure")}});
+        continue;
+      }
+      ++estimated_;
+      const double err = object.at("err_cm").get<double>();
+      const double variance = object.at("max_var_cm2").get<double>();
+      const bool confident = object.at("confident").get<bool>();
+      errors_.push_back(err);
+      // Items stored by an earlier version have no calibration fields: an absent NEES counts
+      // as missing, an absent ESS is left out.
+      const std::optional<double> nees =
+          object.contains("nees") ? std::optional<double>(object.at("nees").get<double>())
+                                  : std::nullopt;
+      nees_all_.push_back(nees);
+      if (confident) nees_confident_.push_back(nees);
+      if (object.contains("confident_radius") && object.at("confident_radius").get<bool>()) {
+        nees_confident_radius_.push_back(nees);
+      }
+      if (object.contains("ess_min")) ess_.push_back(object.at("ess_min").get<double>());
+      if (confident) {
+        confident_errors_.push_back(err);
+        if (err > 2.0) ++confident_over_2cm_;
+      }
+      if (object.at("visibility").is_null()) continue;
+      const double visibility = object.at("visibility").get<double>();
+      if (visibility >= 0.9) {
+        ++high_visibility_;
+        if (confident) ++high_visibility_confident_;
+        high_variances_.push_back(variance);
+      } else if (visibility < 0.3) {
+        low_variances_.push_back(variance);
+      }
+    }
+  }
+
+  nlohmann::json finish(const batch::BatchTotals& totals) override {
+    nlohmann::json summary;
+    summary["command"] = "estimate";
+    summary["options"] = fingerprint_;
+    summary["counts"] = totals.to_json();
+    summary["counts"]["images_computed"] = images_;
+    summary["counts"]["images_with_inferred_graph"] = graphs_inferred_;
+    summary["counts"]["images_with_synthetic_depth"] = synthetic_observations_;
+    summary["counts"]["images_with_synthetic_detections"] = synthetic_detections_;
+    summary["counts"]["objects"] = objects_;
+    summary["counts"]["estimated"] = estimated_;
+    summary["counts"]["confident"] = confident_errors_.size();
+    double sum = 0;
+    for (double e : confident_errors_) sum += e;
+    double all = 0;
+    for (double e : errors_) all += e;
+    nlohmann::json accuracy;
+    accuracy["mean_err_cm_all"] =
+        errors_.empty() ? nlohmann::json(nullptr) : batch::json_rounded(all / errors_.size(), 4);
+    accuracy["median_err_cm_all"] = batch::json_rounded(median(errors_), 4);
+    accuracy["mean_err_cm_confident"] =
+        confident_errors_.empty() ? nlohmann::json(nullptr)
+                                  : batch::json_rounded(sum / confident_errors_.size(), 4);
+    accuracy["fraction_confident_over_2cm"] =
+        confident_errors_.empty()
+            ? nlohmann::json(nullptr)
+            : batch::json_rounded(double(confident_over_2cm_) / confident_errors_.size(), 4);
+    accuracy["objects_visibility_at_least_90"] = high_visibility_;
+    accuracy["fraction_confident_visibility_at_least_90"] =
+        high_visibility_
+            ? batch::json_rounded(double(high_visibility_confident_) / high_visibility_, 4)
+            : nlohmann::json(nullptr);
+    accuracy["objects_visibility_below_30"] = low_variances_.size();
+    accuracy["median_max_var_cm2_visibility_below_30"] =
+        batch::json_rounded(median(low_variances_), 6);
+    accuracy["median_max_var_cm2_visibility_at_least_90"] =
+        batch::json_rounded(median(high_variances_), 6);
+    accuracy["note"] =
+        "visibility is Eq. 10 of the rendered GT scene; max_var is the largest per-axis variance "
+        "of the estimate's covariance (support frame)";
+    summary["accuracy"] = accuracy;
+    nlohmann::ordered_json calibration;
+    calibration["note"] =
+        "coverage: share of estimates with nees = sum_a err_a^2 / var_a (support-frame axes) at "
+        "most the chi-square (3 dof) quantile of each nominal level, over the estimates with a "
+        "finite nees (nees_missing: a zero variance); confident is every axis variance <= "
+        "variance_threshold_cm2";
+    calibration["all"] = report::coverage_json(report::coverage(nees_all_));
+    calibration["confident"] = report::coverage_json(report::coverage(nees_confident_));
+    if (fingerprint_.contains("confidence_radius_cm")) {
+      calibration["confident_radius"] =
+          report::coverage_json(report::coverage(nees_confident_radius_));
+    }
+    calibration["ess_min"] = report::ess_json(report::ess_quantiles(ess_));
+    summary["calibration"] = nlohmann::json::parse(calibration.dump());
+    summary["object_failures"] = object_failures_;
+    summary["image_failures"] = image_failures_;
+    summary["input_checks"] = input_checks_.to_json();
+    summary["timing"] =
+        "per-run wall time is in run.json; time_ms in estimates.csv and time in results_bop.csv "
+        "are measured (empty / -1 with --no-time, which makes every output byte-reproducible)";
+    return summary;
+  }
+
+ private:
+  nlohmann::json fingerprint_;
+  batch::InputCheckTotals input_checks_;
+  long images_ = 0, graphs_inferred_ = 0, objects_ = 0, estimated_ = 0;
+  long synthetic_observations_ = 0, synthetic_detections_ = 0;
+  long confident_over_2cm_ = 0, high_visibility_ = 0, high_visibility_confident_ = 0;
+  std::vector<double> errors_, confident_errors_, low_variances_, high_variances_, ess_;
+  std::vector<std::optional<double>> nees_all_, nees_confident_, nees_confident_radius_;
+  nlohmann::json object_failures_ = nlohmann::json::array();
+  nlohmann::json image_failures_ = nlohmann::json::array();
+};
+
+}  // namespace
+
+batch::BatchOutputSpec estimate_output_spec() {
+  batch::BatchOutputSpec spec;
+  spec.command = "estimate";
+  spec.tables = {batch::estimates_table().spec(), batch::bop_results_table().spec()};
+  spec.make_summary = [](const nlohmann::json& fingerprint, const fs::path&) {
+    return std::make_unique<EstimateSummary>(fingerprint);
+  };
+  return spec;
+}
+
+bool EstimateJobOptions::IsValid(std::string* why) const { return estimate.IsValid(why); }
+
+batch::BatchResult run_estimate_job(const EstimateJobOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw batch::UsageError(why);
+  EstimateJobOptions job_options = options;
+  job_options.estimate.keep_history = options.save_beliefs;
+  datasets::BopDataset dataset = batch::open_dataset(job_options.dataset);
+  if (!job_options.detections.empty()) dataset.attach_detections(job_options.detections);
+  const EstimateOptions& e = job_options.estimate;
+  batch::BatchJob job;
+  const batch::BatchOutputSpec output = estimate_output_spec();
+  job.output = &output;
+  job.items = dataset.list_images(batch::selection_of(job_options.dataset));
+  job.fingerprint = batch::dataset_fingerprint(job_options.dataset);
+  job.fingerprint["particles"] = e.particles;
+  job.fingerprint["iterations"] = e.iterations;
+  job.fingerprint["gibbs_sweeps"] = e.gibbs_sweeps;
+  job.fingerprint["icp_samples"] = e.icp_samples;
+  job.fingerprint["variance_threshold_cm2"] = e.variance_threshold_cm2;
+  if (e.confidence_radius_cm) job.fingerprint["confidence_radius_cm"] = *e.confidence_radius_cm;
+  job.fingerprint["seed"] = e.seed;
+  job.fingerprint["detections"] =
+      job_options.detections.empty() ? "" : fs::absolute(job_options.detections).string();
+  job.fingerprint["save_beliefs"] = job_options.save_beliefs;
+  job.fingerprint["no_time"] = job_options.no_time;
+  job.fingerprint["unary_lambda"] = e.unary_lambda;
+  job.fingerprint["unary_truncation_mm"] = 1e3 * e.unary_truncation_m;
+  job.fingerprint["grid_pixels"] = e.grid_pixels;
+  job.fingerprint["proxy_triangles"] = e.proxy_triangles;
+  job.fingerprint["proxy_tolerance_mm"] = 1e3 * e.proxy_tolerance_m;
+  job.fingerprint["bandwidth_floor_mm"] = 1e3 * e.min_bandwidth_m;
+  job.fingerprint["icp_max_distance_mm"] = 1e3 * e.icp_max_distance_m;
+  // Always recorded: folders of earlier runs, which used aabb without saying so, do not resume.
+  job.fingerprint["non_contact"] = to_string(e.non_contact);
+  if (!e.non_contact_edges) job.fingerprint["non_contact_edges"] = false;
+  if (!e.support_edges) job.fingerprint["support_edges"] = false;
+  // The belief proposal and covariance of this version: always recorded, so that folders of
+  // earlier estimators (untempered product proposals, spread-only variances) do not resume.
+  job.fingerprint["belief_proposal"] = e.adaptive_belief_proposal ? "adaptive" : "product";
+  job.fingerprint["min_ess_fraction"] = e.min_effective_sample_fraction;
+  job.fingerprint["correlated_pixels"] = e.correlated_pixels;
+  // Always recorded (resolved): estimates of earlier versions assumed none.
+  const ModelMisfit misfit = resolve_model_misfit(e, dataset);
+  job.fingerprint["model_misfit_mm"] = 1e3 * misfit.translation_m;
+  job.fingerprint["model_misfit_deg"] = misfit.rotation_deg;
+  job.fingerprint["model_misfit_source"] = misfit.source;
+  job.fingerprint["max_seen_through"] = e.max_seen_through;
+  job.fingerprint["max_belief_shift"] = e.max_belief_shift;
+  // Defaults add nothing, so that folders of earlier runs keep resuming.
+  const datasets::DetectorOptions default_detector;
+  if (!e.detector.amodal_boxes) job.fingerprint["amodal_boxes"] = false;
+  if (e.detector.amodal_score != default_detector.amodal_score)
+    job.fingerprint["amodal_score"] = e.detector.amodal_score;
+  if (e.detector.amodal_jitter != default_detector.amodal_jitter)
+    job.fingerprint["amodal_jitter"] = e.detector.amodal_jitter;
+  if (e.detector.amodal_below_visibility != default_detector.amodal_below_visibility)
+    job.fingerprint["amodal_below_visibility"] = e.detector.amodal_below_visibility;
+  if (e.amodal_below_score) job.fingerprint["amodal_below_score"] = *e.amodal_below_score;
+  if (e.observation == Observation::kSynthetic) {
+    job.fingerprint["observation"] = to_string(e.observation);
+    // Default sensor adds nothing, so that folders of earlier runs keep resuming.
+    if (e.sensor.preset != "default") job.fingerprint["sensor"] = datasets::to_json(e.sensor);
+  } else {
+    batch::add_depth_check_fingerprint(e.depth, &job.fingerprint);
+  }
+  job.input_digest = batch::bop_image_digest(dataset);
+  job.make_worker = [&dataset, &job_options]() -> batch::ItemFunction {
+    auto worker = std::make_shared<EstimateWorker>(dataset, job_options);
+    return [worker](const datasets::ImageKey& key) { return worker->run(key); };
+  };
+  // Set before the workers create their GL contexts (see render/context.hpp).
+  const render::WorkerRasterisationScope rasterisation;
+  return batch::run_batch(job, batch::batch_options_of(job_options.dataset, "estimate"));
+}
+
+}  // namespace clutterscope::scene_estimation

@@ -1,0 +1,162 @@
+#include <algorithm>
+#include <atomic>
+#include <clutterscope/batch/dataset_selection.hpp>
+#include <iostream>
+#include <thread>
+
+namespace clutterscope::batch {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Ranges wider than this are a typo, not a selection.
+constexpr long kMaxRangeSpan = 10'000'000;
+
+int parse_id(const std::string& text, const std::string& option, const std::string& whole) {
+  if (text.empty() || text.size() > 9 ||
+      text.find_first_not_of("0123456789") != std::string::npos) {
+    throw UsageError(option + ": '" + text + "' in '" + whole +
+                     "' is not an id (expected non-negative ids and ranges, e.g. 1,2,5-7)");
+  }
+  return std::stoi(text);
+}
+
+}  // namespace
+
+std::vector<int> parse_id_list(const std::string& text, const std::string& option) {
+  std::vector<int> ids;
+  if (text.empty()) return ids;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const std::string token = text.substr(start, comma - start);
+    const std::size_t dash = token.find('-');
+    if (dash == std::string::npos) {
+      ids.push_back(parse_id(token, option, text));
+    } else {
+      const int first = parse_id(token.substr(0, dash), option, text);
+      const int last = parse_id(token.substr(dash + 1), option, text);
+      if (last < first || static_cast<long>(last) - first > kMaxRangeSpan) {
+        throw UsageError(option + ": range '" + token + "' must be FIRST-LAST with FIRST <= LAST" +
+                         " and at most " + std::to_string(kMaxRangeSpan) + " ids");
+      }
+      for (int id = first; id <= last; ++id) ids.push_back(id);
+    }
+    start = comma + 1;
+  }
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  return ids;
+}
+
+std::string format_id_list(const std::vector<int>& ids) {
+  std::string text;
+  for (std::size_t first = 0; first < ids.size();) {
+    std::size_t last = first;
+    while (last + 1 < ids.size() && ids[last + 1] == ids[last] + 1) ++last;
+    if (!text.empty()) text += ',';
+    text += std::to_string(ids[first]);
+    if (last > first) text += "-" + std::to_string(ids[last]);
+    first = last + 1;
+  }
+  return text;
+}
+
+std::string split_folder(const DatasetOptions& options) {
+  return options.split_type.empty() ? options.split : options.split + "_" + options.split_type;
+}
+
+datasets::DatasetSelection selection_of(const DatasetOptions& options) {
+  datasets::DatasetSelection selection;
+  selection.splits = {split_folder(options)};
+  selection.scene_ids = parse_id_list(options.scenes, "--scenes");
+  selection.image_ids = parse_id_list(options.images, "--images");
+  return selection;
+}
+
+void warn_if_more_jobs_than_cores(int jobs) {
+  const unsigned cores = std::thread::hardware_concurrency();
+  static std::atomic<bool> warned{false};
+  if (cores == 0 || jobs <= static_cast<int>(cores) || warned.exchange(true)) return;
+  std::cerr << "warning: --jobs " << jobs << " is more than the " << cores
+            << " cores of this machine: workers beyond that only compete for them (and each "
+               "holds a render context); continuing\n";
+}
+
+BatchOptions batch_options_of(const DatasetOptions& options, const std::string& label) {
+  warn_if_more_jobs_than_cores(options.jobs);
+  BatchOptions batch;
+  batch.out_dir = options.out;
+  batch.jobs = options.jobs;
+  if (!options.shard.empty()) batch.shard = parse_shard(options.shard);
+  batch.keep_going = options.keep_going;
+  batch.quiet = options.quiet;
+  batch.progress_label = label;
+  return batch;
+}
+
+datasets::BopDataset open_dataset(const DatasetOptions& options) {
+  datasets::BopOpenOptions open;
+  open.models_dir = options.models_dir;
+  open.camera_type = options.split_type;
+  std::string why;
+  if (!open.IsValid(&why)) throw UsageError("--models-dir/--split-type: " + why);
+  datasets::BopDataset dataset = datasets::BopDataset::open(options.dataset, open);
+  if (!options.targets.empty()) {
+    dataset.attach_targets(datasets::read_test_targets(options.targets), options.targets);
+  }
+  return dataset;
+}
+
+nlohmann::json input_checks_of(const datasets::SceneView& view) {
+  std::int64_t off = 0;
+  double worst = 0.0;
+  for (const datasets::GtInstance& object : view.objects) {
+    const double error = datasets::rotation_orthonormality_error(object.model_to_camera.linear());
+    if (error > datasets::kRotationReportThreshold) ++off;
+    worst = std::max(worst, error);
+  }
+  return {{"rotations_off", off}, {"max_rotation_error", worst}};
+}
+
+void InputCheckTotals::add(const nlohmann::json& image_checks) {
+  rotations_off_orthonormal_ += image_checks.at("rotations_off").get<std::int64_t>();
+  max_rotation_error_ =
+      std::max(max_rotation_error_, image_checks.at("max_rotation_error").get<double>());
+}
+
+nlohmann::json InputCheckTotals::to_json() const {
+  return {{"rotations_off_orthonormal_1e-6", rotations_off_orthonormal_},
+          {"max_rotation_orthonormality_error", max_rotation_error_},
+          {"note",
+           "GT rotations (cam_R_m2c) are used as stored, as bop_toolkit does; accepted up to "
+           "|R^T R - I| = 0.02, refused beyond"}};
+}
+
+nlohmann::json dataset_fingerprint(const DatasetOptions& options) {
+  std::error_code error;
+  fs::path dataset = fs::weakly_canonical(fs::absolute(options.dataset), error);
+  if (error) dataset = fs::absolute(options.dataset).lexically_normal();
+  nlohmann::json fingerprint = {
+      {"dataset", dataset.string()},
+      {"split", options.split},
+      {"scenes", format_id_list(parse_id_list(options.scenes, "--scenes"))},
+      {"images", format_id_list(parse_id_list(options.images, "--images"))}};
+  if (!options.split_type.empty()) fingerprint["split_type"] = options.split_type;
+  if (options.models_dir != "models") fingerprint["models_dir"] = options.models_dir;
+  if (!options.targets.empty()) {
+    fs::path targets = fs::weakly_canonical(fs::absolute(options.targets), error);
+    if (error) targets = fs::absolute(options.targets).lexically_normal();
+    fingerprint["targets"] = targets.string();
+  }
+  return fingerprint;
+}
+
+void add_depth_check_fingerprint(const datasets::DepthCheckOptions& options,
+                                 nlohmann::json* fingerprint) {
+  if (options.depth_scale) (*fingerprint)["depth_scale"] = *options.depth_scale;
+  if (!options.check) (*fingerprint)["depth_check"] = false;
+}
+
+}  // namespace clutterscope::batch
