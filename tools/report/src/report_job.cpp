@@ -1,9 +1,5 @@
-#include "report_job.hpp"
-
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
-#include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/output_folder.hpp>
 #include <clutterscope/batch/table_layouts.hpp>
@@ -12,7 +8,7 @@
 #include <clutterscope/datasets/files.hpp>
 #include <clutterscope/notebooks_export/notebook.hpp>
 #include <clutterscope/report/beliefs.hpp>
-#include <clutterscope/report/report.hpp>
+#include <clutterscope/report/report_job.hpp>
 #include <clutterscope/report/tables.hpp>
 #include <cmath>
 #include <opencv2/core.hpp>
@@ -23,21 +19,15 @@
 #include <tuple>
 #include <utility>
 
-#include "commands.hpp"
-
-namespace clutterscope::cli {
+namespace clutterscope::report {
 
 namespace fs = std::filesystem;
 
 namespace {
 
-using AddCommand = void (*)(CLI::App&, int*);
-
-AddCommand step_registration(const std::string& command) {
-  if (command == "visibility") return &add_visibility_command;
-  if (command == "estimate") return &add_estimate_command;
-  throw std::logic_error("report has no step '" + command + "'");
-}
+// The steps run in this order; each writes DIR/STEP.
+constexpr const char* kEstimateStep = "estimate";
+constexpr const char* kVisibilityStep = "visibility";
 
 fs::path marker_path(const fs::path& dir) { return dir / ".report" / "job.json"; }
 
@@ -61,53 +51,32 @@ std::string canonical_value(const std::string& value) {
   return value;
 }
 
-// An app that parses and validates but runs no command: CLI11 calls pre_callback() after every
-// check and before the commands' callbacks. (Replacing the callbacks instead would destroy the
-// option storage they own while the parse still writes into it.)
-class ValidatingApp : public CLI::App {
- public:
-  struct Validated {};
-  void pre_callback() override { throw Validated{}; }
+// What a step's job did, as its run.json records it (seconds to the millisecond).
+struct StepResult : StepRun {
+  int exit_code = 0;
 };
 
-// Parses (and, unless dry_run, runs) one step's command line with the step's own command, so
-// its options are validated exactly as `clutterscope COMMAND` would. Returns its exit code.
-int parse_step(const std::vector<std::string>& command_line, bool dry_run) {
-  ValidatingApp validating;
-  CLI::App running;
-  CLI::App& app = dry_run ? static_cast<CLI::App&>(validating) : running;
-  int exit_code = 0;
-  step_registration(command_line.front())(app, &exit_code);
-  std::vector<std::string> reversed(command_line.rbegin(), command_line.rend());
-  try {
-    app.parse(reversed);
-  } catch (const ValidatingApp::Validated&) {
-    // dry run: the options are valid
-  }
-  return exit_code;
-}
-
-StepRun read_step_run(const fs::path& step_dir, const std::string& command) {
-  const nlohmann::json run = datasets::read_json(step_dir / "run.json");
-  StepRun step;
+StepResult step_run(const std::string& command, const batch::BatchResult& result) {
+  StepResult step;
   step.command = command;
-  step.computed = run.at("computed").get<std::size_t>();
-  step.resumed = run.at("resumed").get<std::size_t>();
-  step.failed = run.at("failed").get<std::size_t>();
-  step.seconds = run.at("seconds").get<double>();
+  step.computed = result.computed;
+  step.resumed = result.resumed;
+  step.failed = result.failed;
+  step.seconds = batch::json_rounded(result.seconds, 3).get<double>();
+  step.exit_code = result.exit_code();
   return step;
 }
 
 // With --keep-going an image may have failed in one step only; its rows are left out of the
 // other step's table so that the join sees only images both steps finished.
-std::vector<report::EstimateRow> estimates_of_visible_images(
-    std::vector<report::EstimateRow> estimates, const std::vector<report::ObjectRow>& objects) {
+std::vector<EstimateRow> estimates_of_visible_images(std::vector<EstimateRow> estimates,
+                                                     const std::vector<ObjectRow>& objects) {
   std::set<std::tuple<std::string, int, int>> images;
-  for (const report::ObjectRow& object : objects) {
+  for (const ObjectRow& object : objects) {
     images.emplace(object.split, object.scene_id, object.im_id);
   }
   estimates.erase(std::remove_if(estimates.begin(), estimates.end(),
-                                 [&images](const report::EstimateRow& row) {
+                                 [&images](const EstimateRow& row) {
                                    return images.count({row.split, row.scene_id, row.im_id}) == 0;
                                  }),
                   estimates.end());
@@ -117,11 +86,11 @@ std::vector<report::EstimateRow> estimates_of_visible_images(
 // summary.json's "run": the dataset selection, every step's options as the step recorded them
 // (its summary.json, defaults included), and the analysis options. No times: the bytes must
 // not change when a finished report is re-run.
-nlohmann::ordered_json run_record(const ReportArguments& arguments, const fs::path& dir) {
+nlohmann::ordered_json run_record(const ReportJobOptions& options, const fs::path& dir) {
   nlohmann::ordered_json run;
   run["command"] = "report";
   run["tool_version"] = CLUTTERSCOPE_VERSION;
-  run["dataset"] = dataset_fingerprint(arguments.dataset);
+  run["dataset"] = batch::dataset_fingerprint(options.dataset);
   nlohmann::ordered_json failures;
   for (const char* step : {"visibility", "estimate"}) {
     const nlohmann::json summary = datasets::read_json(dir / step / "summary.json");
@@ -132,7 +101,7 @@ nlohmann::ordered_json run_record(const ReportArguments& arguments, const fs::pa
   run["failed_images"] = failures;
   // The checks on the GT both steps read (rotations off orthonormal), as visibility counted.
   run["input_checks"] = datasets::read_json(dir / "visibility" / "summary.json").at("input_checks");
-  const report::ReportOptions& analysis = arguments.analysis;
+  const ReportOptions& analysis = options.analysis;
   run["analysis"] = {{"accurate_cm", analysis.accurate_cm},
                      {"variance_threshold_cm2", analysis.variance_threshold_cm2},
                      {"visibility_cutoff", analysis.visibility_cutoff},
@@ -143,7 +112,7 @@ nlohmann::ordered_json run_record(const ReportArguments& arguments, const fs::pa
   return run;
 }
 
-void write_notebook(const fs::path& dir, const report::ReportOptions& analysis) {
+void write_notebook(const fs::path& dir, const ReportOptions& analysis) {
   notebooks_export::NotebookOptions options;
   options.variance_threshold_cm2 = analysis.variance_threshold_cm2;
   options.visibility_cutoff = analysis.visibility_cutoff;
@@ -173,23 +142,6 @@ void write_run_json(const fs::path& dir, const std::vector<StepRun>& steps, doub
   datasets::write_file_atomically(dir / "run.json", run.dump(2) + "\n");
 }
 
-// The forwarded estimate options, then the report's threshold and seed: they are the
-// estimator's too, so that "confident" and the random streams mean the same in DIR/estimate
-// and in the report.
-void append_estimate_options(const ReportArguments& arguments, std::vector<std::string>* line) {
-  for (const auto& [name, value] : arguments.estimate) {
-    line->push_back(name);
-    if (!value.empty()) line->push_back(value);
-  }
-  line->insert(line->end(), {"--variance-threshold-cm2",
-                             batch::format_shortest(arguments.analysis.variance_threshold_cm2),
-                             "--seed", std::to_string(arguments.analysis.seed)});
-  if (arguments.analysis.confidence_radius_cm) {
-    line->insert(line->end(), {"--confidence-radius-cm",
-                               batch::format_shortest(*arguments.analysis.confidence_radius_cm)});
-  }
-}
-
 // ---- Belief figures ----
 
 // The largest background width embedded: enough for the figure's panels, and it keeps
@@ -199,45 +151,20 @@ constexpr int kMaxBackgroundWidth = 640;
 // Belief samples are saved for the drawn images only: the estimate step runs again on each
 // of them, alone, with --save-beliefs, into DIR/beliefs/SPLIT_SCENE_IMID. Per-image random
 // streams make its estimates those of DIR/estimate; its batch runner makes a re-run reuse it.
-fs::path belief_run_dir(const fs::path& dir, const report::ImageSummary& image) {
+fs::path belief_run_dir(const fs::path& dir, const ImageSummary& image) {
   return dir / "beliefs" /
          (image.split + "_" + datasets::six_digits(image.scene_id) + "_" +
           datasets::six_digits(image.im_id));
 }
 
-fs::path beliefs_csv(const fs::path& estimate_dir, const report::ImageSummary& image) {
+fs::path beliefs_csv(const fs::path& estimate_dir, const ImageSummary& image) {
   return estimate_dir / batch::belief_samples_table().file_name / image.split /
          datasets::six_digits(image.scene_id) / (datasets::six_digits(image.im_id) + ".csv");
 }
 
-// --split-type, --models-dir and --targets where given, for the steps' command lines.
-void append_dataset_layout_options(const DatasetOptions& dataset, std::vector<std::string>* line) {
-  if (!dataset.split_type.empty()) line->insert(line->end(), {"--split-type", dataset.split_type});
-  if (dataset.models_dir != "models") {
-    line->insert(line->end(), {"--models-dir", dataset.models_dir});
-  }
-  if (!dataset.targets.empty()) line->insert(line->end(), {"--targets", dataset.targets});
-}
-
-std::vector<std::string> belief_command_line(const ReportArguments& arguments,
-                                             const report::ImageSummary& image,
-                                             const fs::path& out) {
-  std::vector<std::string> line = {"estimate", arguments.dataset.dataset,
-                                   "--out",    out.string(),
-                                   "--split",  arguments.dataset.split,
-                                   "--scenes", std::to_string(image.scene_id),
-                                   "--images", std::to_string(image.im_id),
-                                   "--jobs",   "1",
-                                   "--quiet",  "--save-beliefs"};
-  append_dataset_layout_options(arguments.dataset, &line);
-  if (arguments.dataset.keep_going) line.push_back("--keep-going");
-  append_estimate_options(arguments, &line);
-  return line;
-}
-
 // The image under the samples: the RGB image, else the measured depth shaded (near bright),
 // else a grey frame; at most kMaxBackgroundWidth wide. `K` is mapped onto its pixel grid.
-void load_background(const datasets::SceneView& view, report::BeliefImage* figure) {
+void load_background(const datasets::SceneView& view, BeliefImage* figure) {
   cv::Mat raster;
   if (!view.rgb_path.empty()) {
     raster = cv::imread(view.rgb_path.string(), cv::IMREAD_COLOR);
@@ -280,12 +207,12 @@ void load_background(const datasets::SceneView& view, report::BeliefImage* figur
     K.row(1) *= static_cast<double>(smaller.rows) / raster.rows;
     raster = smaller;
   }
-  figure->background = report::svg::BackgroundImage::from_raster(raster);
+  figure->background = svg::BackgroundImage::from_raster(raster);
   figure->K = K;
 }
 
 struct BeliefFigures {
-  std::vector<report::NamedPlot> plots;
+  std::vector<NamedPlot> plots;
   StepRun step{"beliefs"};
   int exit_code = 0;
 };
@@ -293,22 +220,22 @@ struct BeliefFigures {
 // The belief figures of the chosen images. With --save-beliefs the estimate step saved every
 // image's samples already; otherwise each chosen image is estimated again (once: a re-run
 // resumes it).
-BeliefFigures belief_figures(const ReportArguments& arguments, const fs::path& dir,
-                             const std::vector<report::ObjectRow>& objects,
-                             const report::ReportAnalysis& analysis) {
+BeliefFigures belief_figures(const ReportJobOptions& options, const ReportSteps& steps,
+                             const fs::path& dir, const std::vector<ObjectRow>& objects,
+                             const ReportAnalysis& analysis) {
   BeliefFigures figures;
-  const std::vector<report::ImageSummary> chosen =
-      report::choose_belief_images(analysis.images, arguments.analysis.images_with_beliefs);
+  const std::vector<ImageSummary> chosen =
+      choose_belief_images(analysis.images, options.analysis.images_with_beliefs);
   if (chosen.empty()) return figures;
-  const bool saved_by_estimate = arguments.estimate.count("--save-beliefs") > 0;
-  const datasets::BopDataset dataset = open_dataset(arguments.dataset);
-  for (const report::ImageSummary& image : chosen) {
-    fs::path samples = beliefs_csv(dir / "estimate", image);
+  const bool saved_by_estimate = options.estimate_given.count("--save-beliefs") > 0;
+  const datasets::BopDataset dataset = batch::open_dataset(options.dataset);
+  for (const ImageSummary& image : chosen) {
+    fs::path samples = beliefs_csv(dir / kEstimateStep, image);
     if (!saved_by_estimate) {
       const fs::path out = belief_run_dir(dir, image);
-      figures.exit_code = std::max(figures.exit_code,
-                                   parse_step(belief_command_line(arguments, image, out), false));
-      const StepRun step = read_step_run(out, "beliefs");
+      const StepResult step =
+          step_run("beliefs", steps.beliefs({image.split, image.scene_id, image.im_id}, out));
+      figures.exit_code = std::max(figures.exit_code, step.exit_code);
       figures.step.computed += step.computed;
       figures.step.resumed += step.resumed;
       figures.step.failed += step.failed;
@@ -316,11 +243,11 @@ BeliefFigures belief_figures(const ReportArguments& arguments, const fs::path& d
       samples = beliefs_csv(out, image);
     }
     if (!fs::exists(samples)) continue;  // failed under --keep-going (listed in its summary)
-    report::BeliefImage figure;
+    BeliefImage figure;
     figure.image = image;
     const datasets::SceneView view = dataset.load({image.split, image.scene_id, image.im_id});
     load_background(view, &figure);
-    for (const report::ObjectRow& object : objects) {
+    for (const ObjectRow& object : objects) {
       if (object.split == image.split && object.scene_id == image.scene_id &&
           object.im_id == image.im_id) {
         figure.objects.push_back(object);
@@ -331,54 +258,44 @@ BeliefFigures belief_figures(const ReportArguments& arguments, const fs::path& d
       figure.ground_truth_m[static_cast<int>(gt)] =
           view.objects[gt].model_to_camera * (model.min + 0.5 * model.size);
     }
-    figure.samples = report::read_beliefs_csv(samples);
-    figures.plots.push_back(report::belief_plot(figure, arguments.analysis.variance_threshold_cm2));
+    figure.samples = read_beliefs_csv(samples);
+    figures.plots.push_back(belief_plot(figure, options.analysis.variance_threshold_cm2));
   }
   return figures;
 }
 
 }  // namespace
 
-std::vector<std::string> step_command_line(const ReportArguments& arguments,
-                                           const std::string& command) {
-  const DatasetOptions& dataset = arguments.dataset;
-  std::vector<std::string> line = {
-      command,   dataset.dataset, "--out",  (fs::path(dataset.out) / command).string(),
-      "--split", dataset.split,   "--jobs", std::to_string(dataset.jobs)};
-  if (!dataset.scenes.empty()) line.insert(line.end(), {"--scenes", dataset.scenes});
-  if (!dataset.images.empty()) line.insert(line.end(), {"--images", dataset.images});
-  append_dataset_layout_options(dataset, &line);
-  if (dataset.keep_going) line.push_back("--keep-going");
-  if (dataset.quiet) line.push_back("--quiet");
-  if (command == "estimate") {
-    append_estimate_options(arguments, &line);
-  } else {
-    for (const auto& [name, value] : arguments.visibility) {
-      line.push_back(name);
-      if (!value.empty()) line.push_back(value);
-    }
+bool ReportJobOptions::IsValid(std::string* why) const {
+  if (!analysis.IsValid(why)) return false;
+  if (!dataset.shard.empty()) {
+    *why =
+        "report does not take --shard: run `clutterscope visibility` and `clutterscope "
+        "estimate` shards, `clutterscope merge` them into DIR/visibility and DIR/estimate, "
+        "then run report on DIR";
+    return false;
   }
-  return line;
+  return true;
 }
 
-nlohmann::json report_fingerprint(const ReportArguments& arguments) {
+nlohmann::json report_fingerprint(const ReportJobOptions& options) {
   nlohmann::json fingerprint;
   fingerprint["command"] = "report";
-  fingerprint["dataset"] = dataset_fingerprint(arguments.dataset);
-  const auto options_of = [](const ForwardedOptions& options) {
+  fingerprint["dataset"] = dataset_fingerprint(options.dataset);
+  const auto options_of = [](const GivenOptions& given) {
     nlohmann::json json = nlohmann::json::object();
-    for (const auto& [name, value] : options) json[name] = canonical_value(value);
+    for (const auto& [name, value] : given) json[name] = canonical_value(value);
     return json;
   };
-  fingerprint["visibility"] = options_of(arguments.visibility);
-  nlohmann::json estimate = options_of(arguments.estimate);
+  fingerprint["visibility"] = options_of(options.visibility_given);
+  nlohmann::json estimate = options_of(options.estimate_given);
   estimate["--variance-threshold-cm2"] =
-      batch::format_shortest(arguments.analysis.variance_threshold_cm2);
-  estimate["--seed"] = std::to_string(arguments.analysis.seed);
+      batch::format_shortest(options.analysis.variance_threshold_cm2);
+  estimate["--seed"] = std::to_string(options.analysis.seed);
   // Given only: folders of reports without it keep their fingerprint.
-  if (arguments.analysis.confidence_radius_cm) {
+  if (options.analysis.confidence_radius_cm) {
     estimate["--confidence-radius-cm"] =
-        batch::format_shortest(*arguments.analysis.confidence_radius_cm);
+        batch::format_shortest(*options.analysis.confidence_radius_cm);
   }
   fingerprint["estimate"] = estimate;
   return fingerprint;
@@ -409,52 +326,44 @@ void prepare_report_folder(const fs::path& dir, const nlohmann::json& fingerprin
   datasets::write_file_atomically(marker, fingerprint.dump(2) + "\n");
 }
 
-ReportRun run_report(const ReportArguments& arguments) {
+ReportRun run_report(const ReportJobOptions& options, const ReportSteps& steps) {
   const auto start = std::chrono::steady_clock::now();
   std::string why;
-  if (!arguments.analysis.IsValid(&why)) throw batch::UsageError(why);
-  if (!arguments.dataset.shard.empty()) {
-    throw batch::UsageError(
-        "report does not take --shard: run `clutterscope visibility` and `clutterscope "
-        "estimate` shards, `clutterscope merge` them into DIR/visibility and DIR/estimate, "
-        "then run report on DIR");
-  }
-  const fs::path dir = arguments.dataset.out;
-  // Every option of both steps is checked before either step starts work.
-  const std::vector<std::string> steps = {"estimate", "visibility"};
-  for (const std::string& step : steps) parse_step(step_command_line(arguments, step), true);
-  prepare_report_folder(dir, report_fingerprint(arguments));
+  if (!options.IsValid(&why)) throw batch::UsageError(why);
+  const fs::path dir = options.dataset.out;
+  prepare_report_folder(dir, report_fingerprint(options));
   // The steps write DIR/visibility, DIR/estimate and DIR/beliefs/..., which belong to the
   // report: only its own steps may write there.
   const batch::DelegatedOutput steps_write_inside(dir);
 
   ReportRun run;
-  for (const std::string& step : steps) {
-    run.exit_code = std::max(run.exit_code, parse_step(step_command_line(arguments, step), false));
-    run.steps.push_back(read_step_run(dir / step, step));
+  for (const auto& [name, job] :
+       {std::pair{kEstimateStep, &steps.estimate}, std::pair{kVisibilityStep, &steps.visibility}}) {
+    const StepResult step = step_run(name, (*job)(dir / name));
+    run.exit_code = std::max(run.exit_code, step.exit_code);
+    run.steps.push_back(step);
   }
 
-  const fs::path visibility_dir = dir / "visibility";
-  const fs::path estimates_csv = dir / "estimate" / batch::estimates_table().file_name;
-  std::vector<report::ObjectRow> objects =
-      report::read_objects_csv(visibility_dir / batch::visibility_objects_table().file_name);
-  report::join_estimates(
-      objects, estimates_of_visible_images(report::read_estimates_csv(estimates_csv), objects),
-      estimates_csv);
-  const report::ReportAnalysis analysis = report::analyse_report(
-      objects, report::read_images_csv(visibility_dir / batch::visibility_images_table().file_name),
-      arguments.analysis);
-  std::vector<report::NamedPlot> plots = report::standard_plots(objects, analysis);
-  BeliefFigures beliefs = belief_figures(arguments, dir, objects, analysis);
+  const fs::path visibility_dir = dir / kVisibilityStep;
+  const fs::path estimates_csv = dir / kEstimateStep / batch::estimates_table().file_name;
+  std::vector<ObjectRow> objects =
+      read_objects_csv(visibility_dir / batch::visibility_objects_table().file_name);
+  join_estimates(objects, estimates_of_visible_images(read_estimates_csv(estimates_csv), objects),
+                 estimates_csv);
+  const ReportAnalysis analysis = analyse_report(
+      objects, read_images_csv(visibility_dir / batch::visibility_images_table().file_name),
+      options.analysis);
+  std::vector<NamedPlot> plots = standard_plots(objects, analysis);
+  BeliefFigures beliefs = belief_figures(options, steps, dir, objects, analysis);
   run.exit_code = std::max(run.exit_code, beliefs.exit_code);
   run.steps.push_back(beliefs.step);
   plots.insert(plots.end(), beliefs.plots.begin(), beliefs.plots.end());
-  run.files = report::write_report(dir, objects, analysis, plots, run_record(arguments, dir));
-  if (arguments.notebook) write_notebook(dir, arguments.analysis);
-  run.console_summary = report::format_console_summary(analysis);
+  run.files = write_report(dir, objects, analysis, plots, run_record(options, dir));
+  if (options.notebook) write_notebook(dir, options.analysis);
+  run.console_summary = format_console_summary(analysis);
   write_run_json(dir, run.steps,
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   return run;
 }
 
-}  // namespace clutterscope::cli
+}  // namespace clutterscope::report
