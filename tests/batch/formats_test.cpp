@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <clutterscope/batch/formats.hpp>
+#include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <cmath>
 #include <limits>
@@ -102,8 +103,8 @@ TEST(Formats, JsonNeverHoldsNaN) {
 
 TEST(Formats, AtomicWriteReplacesAndLeavesNoTemporary) {
   const auto dir = testing::fresh_dir("atomic");
-  write_text_atomically(dir / "a.txt", "first");
-  write_text_atomically(dir / "a.txt", "second");
+  datasets::write_file_atomically(dir / "a.txt", "first");
+  datasets::write_file_atomically(dir / "a.txt", "second");
   EXPECT_EQ(testing::read_file(dir / "a.txt"), "second");
   int files = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
@@ -113,9 +114,9 @@ TEST(Formats, AtomicWriteReplacesAndLeavesNoTemporary) {
   EXPECT_EQ(files, 1);
   // Missing folders are created (datasets::write_file_atomically); below a file is a write
   // failure (exit 4), not bad input.
-  write_text_atomically(dir / "missing" / "a.txt", "x");
+  datasets::write_file_atomically(dir / "missing" / "a.txt", "x");
   EXPECT_EQ(testing::read_file(dir / "missing" / "a.txt"), "x");
-  EXPECT_THROW(write_text_atomically(dir / "a.txt" / "below_a_file.txt", "x"),
+  EXPECT_THROW(datasets::write_file_atomically(dir / "a.txt" / "below_a_file.txt", "x"),
                datasets::WriteError);
   write_json_atomically(dir / "b.json", {{"x", kNaN}});
   EXPECT_EQ(testing::read_file(dir / "b.json"), "{\n  \"x\": null\n}\n");

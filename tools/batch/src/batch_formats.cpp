@@ -129,7 +129,7 @@ std::string dump_json(const nlohmann::json& value) {
 }
 
 void write_json_atomically(const std::filesystem::path& path, const nlohmann::json& value) {
-  write_text_atomically(path, dump_json(value));
+  datasets::write_file_atomically(path, dump_json(value));
 }
 
 void write_text_atomically(const std::filesystem::path& path, const std::string& contents) {

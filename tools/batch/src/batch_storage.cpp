@@ -35,7 +35,7 @@ nlohmann::json read_json(const fs::path& path) {
 }
 
 void copy_file_atomically(const fs::path& from, const fs::path& to) {
-  write_text_atomically(to, datasets::read_file(from));
+  datasets::write_file_atomically(to, datasets::read_file(from));
 }
 
 std::string items_text(const std::vector<ImageKey>& items) {
@@ -138,7 +138,7 @@ void write_ok_part(const fs::path& out_dir, const ImageKey& key, const ItemOutpu
       {"tables", output.tables}, {"summary", output.summary}, {"files", output.files}};
   // "digest" sorts before the other keys, so read_part_digest reads only the file's start.
   if (input_digest) part[kDigestKey] = format_hex64(*input_digest);
-  write_text_atomically(path, part.dump() + "\n");
+  datasets::write_file_atomically(path, part.dump() + "\n");
   std::error_code ignored;
   fs::remove(part_path(out_dir, key, PartKind::kFailed), ignored);
 }
@@ -159,7 +159,7 @@ std::optional<std::uint64_t> read_part_digest(const fs::path& part) {
 
 void write_failed_part(const fs::path& out_dir, const ImageKey& key, const std::string& message) {
   const fs::path path = part_path(out_dir, key, PartKind::kFailed);
-  write_text_atomically(path, nlohmann::json({{"error", message}}).dump() + "\n");
+  datasets::write_file_atomically(path, nlohmann::json({{"error", message}}).dump() + "\n");
 }
 
 std::string MissingItems::describe() const {
@@ -192,7 +192,7 @@ BatchFolder BatchFolder::prepare(const fs::path& out_dir, const std::string& com
   }
   datasets::create_folders(batch_dir(out_dir));
   // items.tsv first: a job.json always has its item list next to it.
-  write_text_atomically(items_path(out_dir), items_tsv);
+  datasets::write_file_atomically(items_path(out_dir), items_tsv);
   write_json_atomically(job_path(out_dir),
                         {{"format", kFormatVersion}, {"fingerprint", fingerprint}});
   return BatchFolder(out_dir, std::move(fingerprint));

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/input_digest.hpp>
+#include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <cstring>
 #include <fstream>
@@ -294,7 +295,7 @@ void FileDigestCache::save() const {
               format_hex64(entry.hash) + "\t" + path + "\n";
     }
   }
-  write_text_atomically(store_, text);
+  datasets::write_file_atomically(store_, text);
 }
 
 std::size_t FileDigestCache::files_hashed() const {

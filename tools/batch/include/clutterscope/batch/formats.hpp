@@ -62,10 +62,10 @@ nlohmann::json json_number(double value);
 nlohmann::json json_rounded(double value, int decimals);
 // Serialises with 2-space indent and a final newline; non-finite numbers become null.
 std::string dump_json(const nlohmann::json& value);
-// Writes `contents` to `path` atomically: datasets::write_file_atomically (a unique temporary
-// file in the same folder, then rename). Throws datasets::WriteError (exit 4) on I/O failure.
+// Kept for the commands that still call it: use datasets::write_file_atomically (a unique
+// temporary file in the same folder, then rename; datasets::WriteError, exit 4, on failure).
 void write_text_atomically(const std::filesystem::path& path, const std::string& contents);
-// dump_json written atomically (temporary file + rename).
+// dump_json written with datasets::write_file_atomically.
 void write_json_atomically(const std::filesystem::path& path, const nlohmann::json& value);
 
 }  // namespace clutterscope::batch
