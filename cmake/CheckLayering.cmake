@@ -11,12 +11,12 @@ set(CLUTTERSCOPE_LAYERS
   "datasets:"
   "batch:datasets"
   "notebooks_export:"
-  "report:batch,notebooks_export"
+  "report:batch,notebooks_export,estimator"
   "render:datasets"
   "visibility:datasets,render,batch"
   "estimator:"
   "scene_estimation:datasets,render,visibility,estimator,batch,report"
-  "simulation:datasets"
+  "simulation:datasets,scene_estimation,report"
   "cli:datasets,batch,notebooks_export,report,render,visibility,estimator,scene_estimation,simulation")
 
 # Entries are "library:dependency,dependency".

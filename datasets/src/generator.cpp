@@ -446,13 +446,6 @@ Eigen::Isometry3d look_at(const Eigen::Vector3d& eye, const Eigen::Vector3d& tar
   return camera_to_world.inverse();
 }
 
-std::mt19937_64 derive_rng(std::uint64_t seed, std::uint64_t scene, std::uint64_t task) {
-  std::seed_seq sequence{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32),
-                         static_cast<std::uint32_t>(scene), static_cast<std::uint32_t>(scene >> 32),
-                         static_cast<std::uint32_t>(task)};
-  return std::mt19937_64(sequence);
-}
-
 GeneratedScene generate_layout(const std::vector<CatalogueItem>& catalogue,
                                const LayoutOptions& options, std::mt19937_64& rng) {
   std::string why;

@@ -448,145 +448,185 @@ bool is_ply(std::string_view bytes) {
   return bytes.substr(0, 4) == "ply\n" || bytes.substr(0, 5) == "ply\r\n";
 }
 
-Mesh read_ply(const std::filesystem::path& path, std::string_view bytes, float scale) {
-  PlyParser parser(path, bytes);
-  const Header header = parser.parse_header();
-  parser.check_counts(header);
+namespace {
 
-  const Element* vertex_element = nullptr;
-  const Element* face_element = nullptr;
-  for (const Element& element : header.elements) {
-    if (element.name == "vertex") vertex_element = &element;
-    if (element.name == "face") face_element = &element;
-  }
-  if (vertex_element == nullptr) parser.fail("header: no element vertex");
-  int xyz[3], nxyz[3];
+// Where the mesh's data sit in the header: the vertex and face elements and their properties.
+struct PlyLayout {
+  const Element* vertex = nullptr;
+  const Element* face = nullptr;  // may be absent
+  int xyz[3] = {-1, -1, -1};
+  int nxyz[3] = {-1, -1, -1};
   bool has_normals = true;
+  int indices = -1;  // the face element's list of vertex indices
+};
+
+PlyLayout locate_mesh_data(PlyParser& parser, const Header& header) {
+  PlyLayout layout;
+  for (const Element& element : header.elements) {
+    if (element.name == "vertex") layout.vertex = &element;
+    if (element.name == "face") layout.face = &element;
+  }
+  if (layout.vertex == nullptr) parser.fail("header: no element vertex");
+  const Element& vertex = *layout.vertex;
   for (int k = 0; k < 3; ++k) {
     const char* names[3] = {"x", "y", "z"};
     const char* normal_names[3] = {"nx", "ny", "nz"};
-    xyz[k] = find_property(*vertex_element, names[k]);
-    if (xyz[k] < 0 || vertex_element->properties[xyz[k]].count_type) {
+    layout.xyz[k] = find_property(vertex, names[k]);
+    if (layout.xyz[k] < 0 || vertex.properties[layout.xyz[k]].count_type) {
       parser.fail(std::string("header: element vertex has no scalar property ") + names[k]);
     }
-    nxyz[k] = find_property(*vertex_element, normal_names[k]);
-    if (nxyz[k] < 0 || vertex_element->properties[nxyz[k]].count_type) has_normals = false;
+    layout.nxyz[k] = find_property(vertex, normal_names[k]);
+    if (layout.nxyz[k] < 0 || vertex.properties[layout.nxyz[k]].count_type) {
+      layout.has_normals = false;
+    }
   }
-  if (vertex_element->count > std::numeric_limits<std::uint32_t>::max()) {
-    parser.fail("header: element vertex " + std::to_string(vertex_element->count) +
+  if (vertex.count > std::numeric_limits<std::uint32_t>::max()) {
+    parser.fail("header: element vertex " + std::to_string(vertex.count) +
                 " has more vertices than 32-bit indices address");
   }
-  int indices_property = -1;
-  if (face_element != nullptr) {
-    indices_property = find_property(*face_element, "vertex_indices");
-    if (indices_property < 0) indices_property = find_property(*face_element, "vertex_index");
-    if (indices_property < 0 || !face_element->properties[indices_property].count_type ||
-        !is_integer(face_element->properties[indices_property].type)) {
+  if (layout.face != nullptr) {
+    const Element& face = *layout.face;
+    layout.indices = find_property(face, "vertex_indices");
+    if (layout.indices < 0) layout.indices = find_property(face, "vertex_index");
+    if (layout.indices < 0 || !face.properties[layout.indices].count_type ||
+        !is_integer(face.properties[layout.indices].type)) {
       parser.fail("header: element face has no integer list vertex_indices");
     }
   }
+  return layout;
+}
 
-  // Records, in file order. Counts were checked against the body, so these allocations are
-  // bounded by the file size.
-  const auto vertex_count = static_cast<std::uint32_t>(vertex_element->count);
-  std::vector<Vec3> file_positions;  // file units, for triangulation as assimp does it
-  std::vector<Eigen::Vector3f> file_normals;
+// The body's records, in file order.
+struct PlyRecords {
+  std::uint32_t vertex_count = 0;
+  bool has_normals = false;
+  std::vector<Vec3> positions;  // file units, for triangulation as assimp does it
+  std::vector<Eigen::Vector3f> normals;
   std::vector<std::uint32_t> corners;       // all faces' indices, concatenated
   std::vector<std::uint64_t> face_offsets;  // face f: corners[offsets[f], offsets[f + 1])
+};
+
+void read_vertex(PlyParser& parser, const Element& element, const PlyLayout& layout,
+                 PlyRecords* records) {
+  const int* xyz = layout.xyz;
+  const int* nxyz = layout.nxyz;
+  double values[9] = {};
+  for (std::size_t p = 0; p < element.properties.size(); ++p) {
+    const Property& property = element.properties[p];
+    const int slot = static_cast<int>(p) == xyz[0]    ? 0
+                     : static_cast<int>(p) == xyz[1]  ? 1
+                     : static_cast<int>(p) == xyz[2]  ? 2
+                     : !layout.has_normals            ? -1
+                     : static_cast<int>(p) == nxyz[0] ? 3
+                     : static_cast<int>(p) == nxyz[1] ? 4
+                     : static_cast<int>(p) == nxyz[2] ? 5
+                                                      : -1;
+    if (slot < 0) {
+      parser.skip(property);
+      continue;
+    }
+    values[slot] = parser.scalar(property.type, property.name);
+  }
+  Vec3 position;
+  for (int k = 0; k < 3; ++k) {
+    position[k] = static_cast<float>(values[k]);
+    if (!std::isfinite(position[k])) {
+      parser.fail(parser.where() + "coordinate " + element.properties[xyz[k]].name +
+                  " is not finite (" + std::to_string(values[k]) + ")");
+    }
+  }
+  records->positions.push_back(position);
+  if (layout.has_normals) {
+    records->normals.emplace_back(static_cast<float>(values[3]), static_cast<float>(values[4]),
+                                  static_cast<float>(values[5]));
+  }
+}
+
+void read_face(PlyParser& parser, const Element& element, const PlyLayout& layout,
+               PlyRecords* records) {
+  for (std::size_t p = 0; p < element.properties.size(); ++p) {
+    const Property& property = element.properties[p];
+    if (static_cast<int>(p) != layout.indices) {
+      parser.skip(property);
+      continue;
+    }
+    const std::uint64_t n = parser.list_count(property);
+    for (std::uint64_t i = 0; i < n; ++i) {
+      const double index = parser.scalar(property.type, property.name);
+      if (!(index >= 0 && index < records->vertex_count)) {
+        parser.fail(parser.where() + "vertex index " +
+                    std::to_string(static_cast<long long>(index)) + " out of range (" +
+                    std::to_string(records->vertex_count) + " vertices)");
+      }
+      records->corners.push_back(static_cast<std::uint32_t>(index));
+    }
+    records->face_offsets.push_back(records->corners.size());
+  }
+}
+
+// Counts were checked against the body, so these allocations are bounded by the file size.
+PlyRecords read_records(PlyParser& parser, const Header& header, const PlyLayout& layout) {
+  PlyRecords records;
+  records.vertex_count = static_cast<std::uint32_t>(layout.vertex->count);
+  records.has_normals = layout.has_normals;
   parser.start_body(header);
   for (const Element& element : header.elements) {
-    const bool is_vertex = &element == vertex_element;
-    const bool is_face = &element == face_element;
+    const bool is_vertex = &element == layout.vertex;
+    const bool is_face = &element == layout.face;
     if (is_vertex) {
-      file_positions.reserve(vertex_count);
-      if (has_normals) file_normals.reserve(vertex_count);
+      records.positions.reserve(records.vertex_count);
+      if (layout.has_normals) records.normals.reserve(records.vertex_count);
     }
-    if (is_face) face_offsets.assign(1, 0);
+    if (is_face) records.face_offsets.assign(1, 0);
     for (std::uint64_t r = 0; r < element.count; ++r) {
       parser.set_record(element.name, r);
       if (is_vertex) {
-        double values[9] = {};
-        for (std::size_t p = 0; p < element.properties.size(); ++p) {
-          const Property& property = element.properties[p];
-          const int slot = static_cast<int>(p) == xyz[0]    ? 0
-                           : static_cast<int>(p) == xyz[1]  ? 1
-                           : static_cast<int>(p) == xyz[2]  ? 2
-                           : !has_normals                   ? -1
-                           : static_cast<int>(p) == nxyz[0] ? 3
-                           : static_cast<int>(p) == nxyz[1] ? 4
-                           : static_cast<int>(p) == nxyz[2] ? 5
-                                                            : -1;
-          if (slot < 0) {
-            parser.skip(property);
-            continue;
-          }
-          values[slot] = parser.scalar(property.type, property.name);
-        }
-        Vec3 position;
-        for (int k = 0; k < 3; ++k) {
-          position[k] = static_cast<float>(values[k]);
-          if (!std::isfinite(position[k])) {
-            parser.fail(parser.where() + "coordinate " + element.properties[xyz[k]].name +
-                        " is not finite (" + std::to_string(values[k]) + ")");
-          }
-        }
-        file_positions.push_back(position);
-        if (has_normals) {
-          file_normals.emplace_back(static_cast<float>(values[3]), static_cast<float>(values[4]),
-                                    static_cast<float>(values[5]));
-        }
+        read_vertex(parser, element, layout, &records);
       } else if (is_face) {
-        for (std::size_t p = 0; p < element.properties.size(); ++p) {
-          const Property& property = element.properties[p];
-          if (static_cast<int>(p) != indices_property) {
-            parser.skip(property);
-            continue;
-          }
-          const std::uint64_t n = parser.list_count(property);
-          for (std::uint64_t i = 0; i < n; ++i) {
-            const double index = parser.scalar(property.type, property.name);
-            if (!(index >= 0 && index < vertex_count)) {
-              parser.fail(parser.where() + "vertex index " +
-                          std::to_string(static_cast<long long>(index)) + " out of range (" +
-                          std::to_string(vertex_count) + " vertices)");
-            }
-            corners.push_back(static_cast<std::uint32_t>(index));
-          }
-          face_offsets.push_back(corners.size());
-        }
+        read_face(parser, element, layout, &records);
       } else {
         for (const Property& property : element.properties) parser.skip(property);
       }
     }
   }
+  return records;
+}
 
-  // Triangulation as assimp's TriangulateProcess and SortByPType do it.
-  const std::size_t face_count = face_offsets.empty() ? 0 : face_offsets.size() - 1;
-  bool has_polygons = false, has_points_or_lines = false;
-  for (std::size_t f = 0; f < face_count; ++f) {
-    const std::uint64_t n = face_offsets[f + 1] - face_offsets[f];
-    has_polygons = has_polygons || n > 3;
-    has_points_or_lines = has_points_or_lines || n < 3;
-  }
+struct Triangulation {
   std::vector<std::array<std::uint32_t, 3>> triangles;
+  bool has_points_or_lines = false;  // faces of fewer than 3 corners (left out)
+};
+
+// Triangulation as assimp's TriangulateProcess and SortByPType do it.
+Triangulation triangulate(PlyParser& parser, const PlyRecords& records) {
+  const std::vector<std::uint64_t>& offsets = records.face_offsets;
+  const std::size_t face_count = offsets.empty() ? 0 : offsets.size() - 1;
+  Triangulation result;
+  bool has_polygons = false;
+  for (std::size_t f = 0; f < face_count; ++f) {
+    const std::uint64_t n = offsets[f + 1] - offsets[f];
+    has_polygons = has_polygons || n > 3;
+    result.has_points_or_lines = result.has_points_or_lines || n < 3;
+  }
+  std::vector<std::array<std::uint32_t, 3>>& triangles = result.triangles;
   NgonEncoder encoder;
   for (std::size_t f = 0; f < face_count; ++f) {
-    const std::uint32_t* face = corners.data() + face_offsets[f];
-    const std::size_t n = face_offsets[f + 1] - face_offsets[f];
+    const std::uint32_t* face = records.corners.data() + offsets[f];
+    const std::size_t n = offsets[f + 1] - offsets[f];
     if (n < 3) continue;
     if (n == 3) {
       std::array<std::uint32_t, 3> t = {face[0], face[1], face[2]};
       if (has_polygons) encoder.triangle(t);
       triangles.push_back(t);
     } else if (n == 4) {
-      const unsigned s = quad_start(file_positions, face);
+      const unsigned s = quad_start(records.positions, face);
       std::array<std::uint32_t, 3> a = {face[s], face[(s + 1) % 4], face[(s + 2) % 4]};
       std::array<std::uint32_t, 3> b = {face[s], face[(s + 2) % 4], face[(s + 3) % 4]};
       encoder.quad(a, b);
       triangles.push_back(a);
       triangles.push_back(b);
     } else {
-      if (!convex(file_positions, face, n)) {
+      if (!convex(records.positions, face, n)) {
         parser.fail("face " + std::to_string(f) + ": concave polygon of " + std::to_string(n) +
                     " vertices (triangulate the model)");
       }
@@ -597,11 +637,44 @@ Mesh read_ply(const std::filesystem::path& path, std::string_view bytes, float s
     }
   }
   if (triangles.empty()) parser.fail("model has no triangles");
+  return result;
+}
 
+// GenSmoothNormals: each vertex takes the unit normal of the last triangle using it, then
+// vertices at one position share the normalised sum (assimp groups positions within 1e-4 of the
+// bounding box diagonal and sums in its spatial-sort order; here exact positions, in index
+// order). Nothing renders with these normals; they keep Mesh::normals full.
+void smooth_normals(const std::vector<Vec3>& file_positions,
+                    const std::vector<std::uint32_t>& source,
+                    const std::vector<std::array<std::uint32_t, 3>>& triangles, Mesh* mesh) {
+  std::vector<Vec3> face_normal(source.size(), Vec3{0, 0, 0});
+  for (const auto& t : triangles) {
+    const Vec3& a = file_positions[source[t[0]]];
+    const Vec3 u = minus(file_positions[source[t[1]]], a);
+    const Vec3 w = minus(file_positions[source[t[2]]], a);
+    const Vec3 n = normalized(
+        {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]});
+    for (const auto index : t) face_normal[index] = n;
+  }
+  const WeldedVertices welded = weld_vertices(*mesh);
+  std::vector<Vec3> sum(welded.positions.size(), Vec3{0, 0, 0});
+  for (std::size_t v = 0; v < source.size(); ++v) {
+    for (int k = 0; k < 3; ++k) sum[welded.index_of[v]][k] += face_normal[v][k];
+  }
+  mesh->normals.reserve(source.size());
+  for (std::size_t v = 0; v < source.size(); ++v) {
+    const Vec3 n = normalized(sum[welded.index_of[v]]);
+    mesh->normals.emplace_back(n[0], n[1], n[2]);
+  }
+}
+
+// The mesh in metres. SortByPType splits a mesh of several primitive types, copying each
+// triangle's corners.
+Mesh build_mesh(const PlyRecords& records, Triangulation triangulation, float scale) {
+  std::vector<std::array<std::uint32_t, 3>>& triangles = triangulation.triangles;
   Mesh mesh;
-  // SortByPType splits a mesh of several primitive types, copying each triangle's corners.
   std::vector<std::uint32_t> source;  // file vertex of each mesh vertex
-  if (has_points_or_lines) {
+  if (triangulation.has_points_or_lines) {
     source.reserve(triangles.size() * 3);
     for (auto& t : triangles) {
       for (auto& index : t) {
@@ -610,44 +683,33 @@ Mesh read_ply(const std::filesystem::path& path, std::string_view bytes, float s
       }
     }
   } else {
-    source.resize(vertex_count);
-    for (std::uint32_t v = 0; v < vertex_count; ++v) source[v] = v;
+    source.resize(records.vertex_count);
+    for (std::uint32_t v = 0; v < records.vertex_count; ++v) source[v] = v;
   }
   mesh.positions.reserve(source.size());
   for (const std::uint32_t v : source) {
-    const Vec3& p = file_positions[v];
+    const Vec3& p = records.positions[v];
     mesh.positions.emplace_back(p[0] * scale, p[1] * scale, p[2] * scale);
   }
-  if (has_normals) {
+  if (records.has_normals) {
     mesh.normals.reserve(source.size());
-    for (const std::uint32_t v : source) mesh.normals.push_back(file_normals[v]);
+    for (const std::uint32_t v : source) mesh.normals.push_back(records.normals[v]);
   } else {
-    // GenSmoothNormals: each vertex takes the unit normal of the last triangle using it, then
-    // vertices at one position share the normalised sum (assimp groups positions within 1e-4
-    // of the bounding box diagonal and sums in its spatial-sort order; here exact positions,
-    // in index order). Nothing renders with these normals; they keep Mesh::normals full.
-    std::vector<Vec3> face_normal(source.size(), Vec3{0, 0, 0});
-    for (const auto& t : triangles) {
-      const Vec3& a = file_positions[source[t[0]]];
-      const Vec3 u = minus(file_positions[source[t[1]]], a);
-      const Vec3 w = minus(file_positions[source[t[2]]], a);
-      const Vec3 n = normalized(
-          {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]});
-      for (const auto index : t) face_normal[index] = n;
-    }
-    const WeldedVertices welded = weld_vertices(mesh);
-    std::vector<Vec3> sum(welded.positions.size(), Vec3{0, 0, 0});
-    for (std::size_t v = 0; v < source.size(); ++v) {
-      for (int k = 0; k < 3; ++k) sum[welded.index_of[v]][k] += face_normal[v][k];
-    }
-    mesh.normals.reserve(source.size());
-    for (std::size_t v = 0; v < source.size(); ++v) {
-      const Vec3 n = normalized(sum[welded.index_of[v]]);
-      mesh.normals.emplace_back(n[0], n[1], n[2]);
-    }
+    smooth_normals(records.positions, source, triangles, &mesh);
   }
   mesh.triangles = std::move(triangles);
   return mesh;
+}
+
+}  // namespace
+
+Mesh read_ply(const std::filesystem::path& path, std::string_view bytes, float scale) {
+  PlyParser parser(path, bytes);
+  const Header header = parser.parse_header();
+  parser.check_counts(header);
+  const PlyLayout layout = locate_mesh_data(parser, header);
+  const PlyRecords records = read_records(parser, header, layout);
+  return build_mesh(records, triangulate(parser, records), scale);
 }
 
 }  // namespace clutterscope::datasets::detail

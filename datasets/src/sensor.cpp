@@ -207,111 +207,124 @@ std::vector<std::string> sensor_presets() {
   return {"default", "kinect-v1", "xtion", "d415", "d435"};
 }
 
+namespace {
+
+// Judgement from ../shared/data/ycbv_real/PROVENANCE.md: scanned YCB models differ from the
+// official YCB-Video ones by ~3 mm and 0.4 deg; per-axis sigmas of 2 mm and 0.25 deg give RMS
+// magnitudes of 3.5 mm and 0.43 deg.
+void set_model_misfit(SensorOptions* o) {
+  o->misfit_translation_sigma_m = 0.002;
+  o->misfit_rotation_sigma_deg = 0.25;
+}
+
+// The PrimeSense reference design: Kinect v1 and the Asus Xtion.
+SensorOptions primesense_preset(const std::string& name) {
+  SensorOptions o;
+  o.preset = name;
+  // Nguyen, Izadi & Lovell 2012 (3DIMPVT), Kinect v1 axial noise:
+  // sigma_z = 0.0012 + 0.0019 (z - 0.4)^2 m + 0.0001 / sqrt(z) * theta^2 / (pi/2 - theta)^2.
+  o.noise_a_m = 0.0012;
+  o.noise_b_per_m = 0.0019;
+  o.noise_z0_m = 0.4;
+  o.noise_angle_m = 0.0001;
+  // OpenNI / the Kinect SDK deliver depth in whole millimetres.
+  o.quantisation_m = 0.001;
+  // Khoshelham & Elberink 2012 (Sensors 12(2):1437): baseline 7.5 cm, disparity in 1/8 px,
+  // IR focal length ~580 px (their calibration: 585.6 px); depth step 7 cm at 5 m.
+  o.disparity_focal_px = 580.0;
+  o.disparity_baseline_m = 0.075;
+  o.disparity_step_px = 0.125;
+  // Structured light: no return where the projector, 7.5 cm beside the IR camera, is
+  // occluded (the shadow band beside objects; Khoshelham & Elberink 2012, Fig. 1). The side
+  // (+x of the image) is a judgement.
+  o.occlusion_shadow = true;
+  // Nguyen et al. 2012 measure returns up to about 70-80 deg; 78 fitted to the real Xtion
+  // frames of ycbv_real (`clutterscope sensor-fit`, README "Sensor fit").
+  o.max_incidence_deg = 78.0;
+  // Judgement: the shadow models the systematic edge losses; a smaller random share
+  // of the remaining depth-edge pixels is lost.
+  o.edge_jump_m = 0.02;
+  o.edge_dropout = 0.3;
+  o.random_dropout = 0.0;  // judgement: no returns lost away from edges and materials
+  // Nguyen et al. 2012 fit from 0.4 m; Khoshelham & Elberink 2012: operating range 0.5-5 m.
+  o.min_range_m = 0.4;
+  o.max_range_m = 5.0;
+  // Nguyen et al. 2012: lateral noise sigma_L ~ 0.8 px (of the 640 x 480 depth image).
+  o.lateral_sigma_px = 0.8;
+  // The PrimeSense chip matches the projected pattern in 9 x 9 px windows (judgement: the
+  // commonly reported block size); pixels within half a window of a depth edge lose returns
+  // and gain noise. Dropout 0.2 and sigma 5 mm at the edge fitted to ycbv_real's 21 Xtion
+  // frames (`clutterscope sensor-fit`: median |residual| 5.4 mm at the edge falling to
+  // 2.5 mm 5 px in, missing returns 47% falling to 5%).
+  o.window_half_px = 4.5;
+  o.window_dropout = 0.2;
+  o.window_sigma_m = 0.005;
+  // Judgement: a fifth of the remaining edge pixels mix foreground and background.
+  o.flying_pixel_probability = 0.2;
+  // Judgement: factory depth-to-colour registration good to about a pixel.
+  o.registration_sigma_px = 0.5;
+  set_model_misfit(&o);
+  if (name == "xtion") {
+    // Asus Xtion Pro Live / PrimeSense Carmine 1.08: the same PrimeSense reference design as
+    // Kinect v1 (baseline 7.5 cm, 1/8 px disparity); YCB-Video was captured with one.
+    // OpenNI's default PrimeSense depth focal length: 570.3 px at 640x480 (judgement: the
+    // ROS openni driver's default, not a calibration of a particular unit).
+    o.disparity_focal_px = 570.3;
+    // Judgement: Asus specifies 0.8-3.5 m; PrimeSense units return from about 0.5 m.
+    o.min_range_m = 0.5;
+    o.max_range_m = 3.5;
+  }
+  return o;
+}
+
+// Intel RealSense D415 and D435 (active stereo).
+SensorOptions realsense_preset(const std::string& name) {
+  SensorOptions o;
+  o.preset = name;
+  // Grunnet-Jepsen et al., Intel, "Tuning depth cameras for best performance" (2018):
+  // depth RMS = Z^2 s / (f B), s ~ 0.08 px subpixel RMS; f = 0.5 HRes / tan(HFOV / 2) at the
+  // 1280 px depth resolution. D415: B = 55 mm, HFOV 65 deg; D435: B = 50 mm, HFOV 87 deg.
+  const double hfov_deg = name == "d415" ? 65.0 : 87.0;
+  const double baseline = name == "d415" ? 0.055 : 0.050;
+  const double focal = 0.5 * 1280.0 / std::tan(0.5 * hfov_deg * kPi / 180.0);
+  constexpr double kSubpixelRms = 0.08;
+  o.noise_a_m = 0.0;
+  o.noise_b_per_m = kSubpixelRms / (focal * baseline);
+  o.noise_z0_m = 0.0;
+  o.noise_angle_m = 0.0;     // judgement: no published angle term for the D400 series
+  o.quantisation_m = 0.001;  // Intel D400 datasheet: default depth unit 1 mm
+  o.disparity_focal_px = focal;
+  o.disparity_baseline_m = baseline;
+  // Judgement: the D4 ASIC reports disparity with 5 fractional bits (1/32 px), well below
+  // the 0.08 px noise.
+  o.disparity_step_px = 1.0 / 32.0;
+  // Stereo with the left imager as reference: no depth where the right imager, B to +x,
+  // cannot see the surface (Intel's "invalid depth band" on the left of objects).
+  o.occlusion_shadow = true;
+  o.max_incidence_deg = 75.0;  // judgement, as the default
+  o.edge_jump_m = 0.02;
+  o.edge_dropout = 0.3;    // judgement
+  o.random_dropout = 0.0;  // judgement
+  // Judgement: Intel's minimum depth at 1280x720 is a few decimetres (D435 0.28 m), range
+  // to about 10 m.
+  o.min_range_m = 0.3;
+  o.max_range_m = 10.0;
+  o.lateral_sigma_px = 0.5;  // judgement: stereo matching windows blur edges by ~half a px
+  // Judgement: stereo matching mixes foreground and background at edges (Intel's
+  // post-processing white paper removes them with an edge-preserving filter).
+  o.flying_pixel_probability = 0.3;
+  o.registration_sigma_px = 0.5;  // judgement: factory registration to about a pixel
+  set_model_misfit(&o);
+  return o;
+}
+
+}  // namespace
+
 SensorOptions sensor_preset(const std::string& name) {
-  SensorOptions o;  // "default": the model of datasets generated before presets existed
-  if (name == "default") return o;
-  const auto model_misfit = [&o] {
-    // Judgement from ../shared/data/ycbv_real/PROVENANCE.md: scanned YCB models differ from
-    // the official YCB-Video ones by ~3 mm and 0.4 deg; per-axis sigmas of 2 mm and 0.25 deg
-    // give RMS magnitudes of 3.5 mm and 0.43 deg.
-    o.misfit_translation_sigma_m = 0.002;
-    o.misfit_rotation_sigma_deg = 0.25;
-  };
-  if (name == "kinect-v1" || name == "xtion") {
-    o.preset = name;
-    // Nguyen, Izadi & Lovell 2012 (3DIMPVT), Kinect v1 axial noise:
-    // sigma_z = 0.0012 + 0.0019 (z - 0.4)^2 m + 0.0001 / sqrt(z) * theta^2 / (pi/2 - theta)^2.
-    o.noise_a_m = 0.0012;
-    o.noise_b_per_m = 0.0019;
-    o.noise_z0_m = 0.4;
-    o.noise_angle_m = 0.0001;
-    // OpenNI / the Kinect SDK deliver depth in whole millimetres.
-    o.quantisation_m = 0.001;
-    // Khoshelham & Elberink 2012 (Sensors 12(2):1437): baseline 7.5 cm, disparity in 1/8 px,
-    // IR focal length ~580 px (their calibration: 585.6 px); depth step 7 cm at 5 m.
-    o.disparity_focal_px = 580.0;
-    o.disparity_baseline_m = 0.075;
-    o.disparity_step_px = 0.125;
-    // Structured light: no return where the projector, 7.5 cm beside the IR camera, is
-    // occluded (the shadow band beside objects; Khoshelham & Elberink 2012, Fig. 1). The side
-    // (+x of the image) is a judgement.
-    o.occlusion_shadow = true;
-    // Nguyen et al. 2012 measure returns up to about 70-80 deg; 78 fitted to the real Xtion
-    // frames of ycbv_real (`clutterscope sensor-fit`, README "Sensor fit").
-    o.max_incidence_deg = 78.0;
-    // Judgement: the shadow models the systematic edge losses; a smaller random share
-    // of the remaining depth-edge pixels is lost.
-    o.edge_jump_m = 0.02;
-    o.edge_dropout = 0.3;
-    o.random_dropout = 0.0;  // judgement: no returns lost away from edges and materials
-    // Nguyen et al. 2012 fit from 0.4 m; Khoshelham & Elberink 2012: operating range 0.5-5 m.
-    o.min_range_m = 0.4;
-    o.max_range_m = 5.0;
-    // Nguyen et al. 2012: lateral noise sigma_L ~ 0.8 px (of the 640 x 480 depth image).
-    o.lateral_sigma_px = 0.8;
-    // The PrimeSense chip matches the projected pattern in 9 x 9 px windows (judgement: the
-    // commonly reported block size); pixels within half a window of a depth edge lose returns
-    // and gain noise. Dropout 0.2 and sigma 5 mm at the edge fitted to ycbv_real's 21 Xtion
-    // frames (`clutterscope sensor-fit`: median |residual| 5.4 mm at the edge falling to
-    // 2.5 mm 5 px in, missing returns 47% falling to 5%).
-    o.window_half_px = 4.5;
-    o.window_dropout = 0.2;
-    o.window_sigma_m = 0.005;
-    // Judgement: a fifth of the remaining edge pixels mix foreground and background.
-    o.flying_pixel_probability = 0.2;
-    // Judgement: factory depth-to-colour registration good to about a pixel.
-    o.registration_sigma_px = 0.5;
-    model_misfit();
-    if (name == "xtion") {
-      // Asus Xtion Pro Live / PrimeSense Carmine 1.08: the same PrimeSense reference design as
-      // Kinect v1 (baseline 7.5 cm, 1/8 px disparity); YCB-Video was captured with one.
-      // OpenNI's default PrimeSense depth focal length: 570.3 px at 640x480 (judgement: the
-      // ROS openni driver's default, not a calibration of a particular unit).
-      o.disparity_focal_px = 570.3;
-      // Judgement: Asus specifies 0.8-3.5 m; PrimeSense units return from about 0.5 m.
-      o.min_range_m = 0.5;
-      o.max_range_m = 3.5;
-    }
-    return o;
-  }
-  if (name == "d415" || name == "d435") {
-    o.preset = name;
-    // Grunnet-Jepsen et al., Intel, "Tuning depth cameras for best performance" (2018):
-    // depth RMS = Z^2 s / (f B), s ~ 0.08 px subpixel RMS; f = 0.5 HRes / tan(HFOV / 2) at the
-    // 1280 px depth resolution. D415: B = 55 mm, HFOV 65 deg; D435: B = 50 mm, HFOV 87 deg.
-    const double hfov_deg = name == "d415" ? 65.0 : 87.0;
-    const double baseline = name == "d415" ? 0.055 : 0.050;
-    const double focal = 0.5 * 1280.0 / std::tan(0.5 * hfov_deg * kPi / 180.0);
-    constexpr double kSubpixelRms = 0.08;
-    o.noise_a_m = 0.0;
-    o.noise_b_per_m = kSubpixelRms / (focal * baseline);
-    o.noise_z0_m = 0.0;
-    o.noise_angle_m = 0.0;     // judgement: no published angle term for the D400 series
-    o.quantisation_m = 0.001;  // Intel D400 datasheet: default depth unit 1 mm
-    o.disparity_focal_px = focal;
-    o.disparity_baseline_m = baseline;
-    // Judgement: the D4 ASIC reports disparity with 5 fractional bits (1/32 px), well below
-    // the 0.08 px noise.
-    o.disparity_step_px = 1.0 / 32.0;
-    // Stereo with the left imager as reference: no depth where the right imager, B to +x,
-    // cannot see the surface (Intel's "invalid depth band" on the left of objects).
-    o.occlusion_shadow = true;
-    o.max_incidence_deg = 75.0;  // judgement, as the default
-    o.edge_jump_m = 0.02;
-    o.edge_dropout = 0.3;    // judgement
-    o.random_dropout = 0.0;  // judgement
-    // Judgement: Intel's minimum depth at 1280x720 is a few decimetres (D435 0.28 m), range
-    // to about 10 m.
-    o.min_range_m = 0.3;
-    o.max_range_m = 10.0;
-    o.lateral_sigma_px = 0.5;  // judgement: stereo matching windows blur edges by ~half a px
-    // Judgement: stereo matching mixes foreground and background at edges (Intel's
-    // post-processing white paper removes them with an edge-preserving filter).
-    o.flying_pixel_probability = 0.3;
-    o.registration_sigma_px = 0.5;  // judgement: factory registration to about a pixel
-    model_misfit();
-    return o;
-  }
+  // "default": the model of datasets generated before presets existed.
+  if (name == "default") return SensorOptions{};
+  if (name == "kinect-v1" || name == "xtion") return primesense_preset(name);
+  if (name == "d415" || name == "d435") return realsense_preset(name);
   std::string known;
   for (const std::string& preset : sensor_presets()) known += (known.empty() ? "" : ", ") + preset;
   throw std::invalid_argument("unknown sensor preset \"" + name + "\" (known: " + known + ")");

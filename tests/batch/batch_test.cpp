@@ -7,7 +7,6 @@
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <fstream>
-#include <set>
 #include <thread>
 
 #include "fake_batch_support.hpp"
@@ -484,28 +483,6 @@ TEST(Batch, ShardsPartitionTheItems) {
       EXPECT_EQ(owners, 1);
     }
   }
-}
-
-TEST(Batch, ItemRngIsAFunctionOfSeedImageAndTask) {
-  const datasets::ImageKey key{"test", 3, 12};
-  EXPECT_EQ(item_rng(1, key, "nbp")(), item_rng(1, key, "nbp")());
-  std::set<std::uint64_t> first_draws;
-  int streams = 0;
-  for (std::uint64_t seed : {0ULL, 1ULL}) {
-    for (const char* split : {"test", "val"}) {
-      for (int scene = 0; scene < 10; ++scene) {
-        for (int im = 0; im < 10; ++im) {
-          for (const char* task : {"nbp", "detector"}) {
-            first_draws.insert(item_rng(seed, {split, scene, im}, task)());
-            ++streams;
-          }
-        }
-      }
-    }
-  }
-  EXPECT_EQ(first_draws.size(), static_cast<std::size_t>(streams)) << "streams collide";
-  // Swapping scene and image ids gives another stream.
-  EXPECT_NE(item_rng(5, {"test", 1, 2}, "t")(), item_rng(5, {"test", 2, 1}, "t")());
 }
 
 }  // namespace

@@ -8,6 +8,7 @@
 #include <clutterscope/batch/storage.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/random_streams.hpp>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -77,10 +78,10 @@ struct FakeWorker {
 
   ItemOutput run(const ImageKey& key) const {
     if (owner != std::this_thread::get_id()) throw std::logic_error("worker used off its thread");
-    std::mt19937_64 rng = item_rng(7, key, "fake");
+    std::mt19937_64 rng = datasets::item_rng(7, key, "fake");
     if (options.max_delay_us > 0) {
       // Its own stream: the delay must not change the results.
-      std::mt19937_64 delay_rng = item_rng(7, key, "delay");
+      std::mt19937_64 delay_rng = datasets::item_rng(7, key, "delay");
       std::uniform_int_distribution<int> delay(0, options.max_delay_us);
       std::this_thread::sleep_for(std::chrono::microseconds(delay(delay_rng)));
     }
@@ -150,8 +151,8 @@ BatchJob fake_job(const fs::path& out_dir, const FakeJobOptions& options) {
   job.items = fake_items(options.scenes, options.images_per_scene);
   job.fingerprint = {{"option", options.option}, {"padding", options.padding_bytes}};
   job.input_digest = [options](const ImageKey& key, FileDigestCache&) {
-    return splitmix64(static_cast<std::uint64_t>(key.scene_id) << 32 |
-                      static_cast<std::uint64_t>(input_version(options, key)));
+    return datasets::splitmix64(static_cast<std::uint64_t>(key.scene_id) << 32 |
+                                static_cast<std::uint64_t>(input_version(options, key)));
   };
   job.make_worker = [out_dir, options]() -> ItemFunction {
     auto worker = std::make_shared<FakeWorker>(out_dir, options);

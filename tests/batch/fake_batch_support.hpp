@@ -1,7 +1,7 @@
 #pragma once
 
 // A batch command without GL for testing the runner: each image yields deterministic rows
-// (from item_rng) in two tables, optionally a file, a delay, or a DatasetError.
+// (from datasets::item_rng) in two tables, optionally a file, a delay, or a DatasetError.
 
 #include <clutterscope/batch/batch.hpp>
 #include <filesystem>

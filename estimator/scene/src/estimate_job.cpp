@@ -3,6 +3,7 @@
 #include <clutterscope/batch/input_digest.hpp>
 #include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/estimator/confidence.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/report/calibration.hpp>
 #include <clutterscope/scene_estimation/estimate_job.hpp>
@@ -57,7 +58,7 @@ class EstimateWorker {
         row.add(100 * *object.error_m, 4).add(100 * *object.initial_error_m, 4);
         for (int a = 0; a < 3; ++a) row.add(100 * (*object.error_support_m)[a], 4);
         row.add(batch::format_general(*object.nees, 6));  // empty when not finite (a zero variance)
-        row.add(batch::format_general(report::radius95_cm(1e4 * object.variance.maxCoeff()), 6));
+        row.add(batch::format_general(estimator::radius95_cm(1e4 * object.variance.maxCoeff()), 6));
         row.add(!confident_radius ? "" : *confident_radius ? "1" : "0");
         row.add(object.effective_sample_size, 2);
         if (object.seen_through) {
@@ -84,7 +85,7 @@ class EstimateWorker {
         entry["err_cm"] = batch::json_rounded(100 * *object.error_m, 4);
         entry["max_var_cm2"] = batch::json_rounded(1e4 * object.variance.maxCoeff(), 6);
         // Calibration (summary.json): a non-finite NEES (a zero variance) is left out.
-        if (report::usable_nees(object.nees)) entry["nees"] = *object.nees;
+        if (estimator::usable_nees(object.nees)) entry["nees"] = *object.nees;
         entry["ess_min"] = object.effective_sample_size;
         if (confident_radius) entry["confident_radius"] = *confident_radius;
         const double threshold = job_.estimate.variance_threshold_cm2;

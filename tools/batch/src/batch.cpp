@@ -325,22 +325,4 @@ BatchResult merge_batches(const MergeOptions& options) {
   return result;
 }
 
-std::mt19937_64 item_rng(std::uint64_t seed, const ImageKey& key, const std::string& task) {
-  std::uint64_t state = seed;
-  const auto absorb = [&state](std::uint64_t value) { state = splitmix64(state ^ value); };
-  absorb(fnv1a64(key.split));
-  absorb(static_cast<std::uint64_t>(static_cast<std::int64_t>(key.scene_id)));
-  absorb(static_cast<std::uint64_t>(static_cast<std::int64_t>(key.im_id)));
-  absorb(fnv1a64(task));
-  // mt19937_64 has 312 words of state: fill it from a seed sequence of 8 mixed words.
-  std::vector<std::uint32_t> words;
-  for (int i = 0; i < 4; ++i) {
-    state = splitmix64(state);
-    words.push_back(static_cast<std::uint32_t>(state));
-    words.push_back(static_cast<std::uint32_t>(state >> 32));
-  }
-  std::seed_seq sequence(words.begin(), words.end());
-  return std::mt19937_64(sequence);
-}
-
 }  // namespace clutterscope::batch

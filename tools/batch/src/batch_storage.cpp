@@ -6,6 +6,7 @@
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/files.hpp>
+#include <clutterscope/datasets/random_streams.hpp>
 #include <fstream>
 #include <sstream>
 
@@ -110,22 +111,6 @@ class TableWriter {
 
 }  // namespace
 
-std::uint64_t splitmix64(std::uint64_t x) {
-  std::uint64_t z = x + 0x9e3779b97f4a7c15ULL;
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
-std::uint64_t fnv1a64(std::string_view text) {
-  std::uint64_t hash = 0xcbf29ce484222325ULL;
-  for (const char c : text) {
-    hash ^= static_cast<unsigned char>(c);
-    hash *= 0x100000001b3ULL;
-  }
-  return hash;
-}
-
 fs::path part_path(const fs::path& out_dir, const ImageKey& key, PartKind kind) {
   return batch_dir(out_dir) / "parts" / key.split / datasets::six_digits(key.scene_id) /
          (datasets::six_digits(key.im_id) + (kind == PartKind::kOk ? ".json" : ".failed.json"));
@@ -179,7 +164,7 @@ BatchFolder BatchFolder::prepare(const fs::path& out_dir, const std::string& com
   nlohmann::json fingerprint = {
       {"command", command},
       {"tool_version", CLUTTERSCOPE_VERSION},
-      {"items", {{"count", items.size()}, {"fnv1a64", format_hex64(fnv1a64(items_tsv))}}},
+      {"items", {{"count", items.size()}, {"fnv1a64", format_hex64(datasets::fnv1a64(items_tsv))}}},
       {"options", options}};
   if (fs::exists(job_path(out_dir))) {
     BatchFolder existing = open(out_dir);

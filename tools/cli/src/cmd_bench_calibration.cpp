@@ -13,6 +13,7 @@
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/files.hpp>
+#include <clutterscope/estimator/confidence.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/report/calibration.hpp>
 #include <clutterscope/scene_estimation/scene_estimate.hpp>
@@ -153,7 +154,7 @@ double max_variance_cm2(const scene_estimation::ObjectEstimate& object) {
 }
 
 std::optional<double> nees_of(const scene_estimation::ObjectEstimate& object) {
-  return report::usable_nees(object.nees) ? object.nees : std::nullopt;
+  return estimator::usable_nees(object.nees) ? object.nees : std::nullopt;
 }
 
 std::string cell(const report::Statistic& statistic, const char* format) {
@@ -284,7 +285,7 @@ void write_csv(const std::vector<CalibrationRow>& rows,
       for (int a = 0; a < 3; ++a) line.add(100 * (*object.error_support_m)[a], 4);
       for (int a = 0; a < 3; ++a) line.add(batch::format_general(1e4 * object.variance[a], 6));
       line.add(optional_text(nees_of(object), 6));
-      line.add(batch::format_general(report::radius95_cm(max_variance_cm2(object)), 6));
+      line.add(batch::format_general(estimator::radius95_cm(max_variance_cm2(object)), 6));
       line.add(object.confident ? "1" : "0");
       line.add(!radius ? "" : scene_estimation::confident_at_radius(object, *radius) ? "1" : "0");
       line.add(object.effective_sample_size, 2);

@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 #include <clutterscope/datasets/catalogue.hpp>
+#include <clutterscope/datasets/random_streams.hpp>  // derive_rng, the generator's streams
 #include <clutterscope/datasets/scene.hpp>
 #include <cstdint>
 #include <random>
@@ -82,10 +83,6 @@ Camera default_camera(int width, int height);
 // or when no placement is found within the bounded number of attempts.
 GeneratedScene generate_layout(const std::vector<CatalogueItem>& catalogue,
                                const LayoutOptions& options, std::mt19937_64& rng);
-
-// The random stream of one (scene, task) of a run with master seed `seed`: independent of the
-// order scenes are generated in.
-std::mt19937_64 derive_rng(std::uint64_t seed, std::uint64_t scene, std::uint64_t task);
 
 // True when every point of the camera-facing faces of `object`'s box (a 5 x 5 grid per face) is
 // behind another object of `scene` seen from `eye` (world). Occluders are conservative: boxes as

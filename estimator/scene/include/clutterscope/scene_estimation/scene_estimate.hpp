@@ -16,7 +16,7 @@
 // surface seen there, its pointwise unary compares silhouette boxes instead of depth (the depth
 // there is the occluders'), the support messages place it along the rays, and its estimate is
 // the belief's mean and spread, without ICP. Random streams are per image
-// (item_rng of seed and image), so results do not depend on threads or shards.
+// (datasets::item_rng of seed and image), so results do not depend on threads or shards.
 //
 // A SceneEstimator owns an EGL context and renderer: one per thread, used on that thread.
 
@@ -191,7 +191,7 @@ struct ViewEstimate {
 };
 
 // The calibrated decision (--confidence-radius-cm) of an estimated object: its 95% ellipsoid fits
-// in a sphere of radius_cm (report::confident_within_radius) and it passed the consistency
+// in a sphere of radius_cm (estimator::confident_within_radius) and it passed the consistency
 // checks.
 bool confident_at_radius(const ObjectEstimate& object, double radius_cm);
 

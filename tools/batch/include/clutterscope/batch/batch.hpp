@@ -38,7 +38,6 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -194,10 +193,5 @@ struct MergeOptions {
 // unsharded run. Throws UsageError when the folders hold different jobs (fingerprints differ)
 // or are not batch folders, DatasetError listing missing items when parts are missing.
 BatchResult merge_batches(const MergeOptions& options);
-
-// A random stream for one (seed, image, task): independent of --jobs, shards and resume.
-// Derived with splitmix64 over the seed, the split name, the scene and image ids and the task.
-std::mt19937_64 item_rng(std::uint64_t seed, const datasets::ImageKey& key,
-                         const std::string& task);
 
 }  // namespace clutterscope::batch

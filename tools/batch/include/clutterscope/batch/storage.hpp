@@ -9,7 +9,6 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
-#include <string_view>
 #include <vector>
 
 namespace clutterscope::batch {
@@ -27,10 +26,6 @@ void write_ok_part(const std::filesystem::path& out_dir, const datasets::ImageKe
 std::optional<std::uint64_t> read_part_digest(const std::filesystem::path& part);
 void write_failed_part(const std::filesystem::path& out_dir, const datasets::ImageKey& key,
                        const std::string& message);
-
-// splitmix64's output function applied to x + golden gamma (Steele et al. 2014).
-std::uint64_t splitmix64(std::uint64_t x);
-std::uint64_t fnv1a64(std::string_view text);
 
 struct MissingItems {
   std::size_t total = 0;                     // items in the job

@@ -1,0 +1,240 @@
+// Stage "refine and fuse" of scene estimation (scene_stages.hpp): K belief samples of each
+// object refined by ICP in the camera frame and fused (a hidden object: its belief's mean and
+// spread), the calibrated covariance, the consistency checks and the errors against the GT.
+
+#include <algorithm>
+#include <clutterscope/datasets/mesh.hpp>
+#include <clutterscope/estimator/icp.hpp>
+#include <clutterscope/estimator/potentials.hpp>
+#include <cmath>
+#include <optional>
+#include <stdexcept>
+
+#include "scene_stages.hpp"
+
+namespace clutterscope::scene_estimation {
+
+namespace {
+
+// Observed points per ICP fit (an even subsample of the box): enough for a translation.
+constexpr int kIcpObservedPoints = 600;
+
+// Model surface points (model frame, metres), area-uniform on the triangles, for ICP.
+Eigen::Matrix3Xd surface_points(const datasets::Mesh& mesh, int count, std::mt19937_64& rng) {
+  std::vector<double> areas;
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3f a = mesh.positions[t[0]], b = mesh.positions[t[1]],
+                          c = mesh.positions[t[2]];
+    areas.push_back(0.5 * static_cast<double>((b - a).cross(c - a).norm()));
+  }
+  Eigen::Matrix3Xd points(3, count);
+  if (areas.empty()) return Eigen::Matrix3Xd(3, 0);
+  std::discrete_distribution<std::size_t> pick(areas.begin(), areas.end());
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int i = 0; i < count; ++i) {
+    const auto& t = mesh.triangles[pick(rng)];
+    double r1 = unit(rng), r2 = unit(rng);
+    if (r1 + r2 > 1) {
+      r1 = 1 - r1;
+      r2 = 1 - r2;
+    }
+    const Eigen::Vector3d a = mesh.positions[t[0]].cast<double>();
+    const Eigen::Vector3d b = mesh.positions[t[1]].cast<double>();
+    const Eigen::Vector3d c = mesh.positions[t[2]].cast<double>();
+    points.col(i) = a + r1 * (b - a) + r2 * (c - a);
+  }
+  return points;
+}
+
+// Observed points (camera frame) of every pixel with depth in the box, at most `limit` (an
+// even subsample in raster order), with their normals from the neighbouring pixels (zero where
+// a neighbour has no depth).
+std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> observed_points(const estimator::BoxObservation& o,
+                                                              int limit) {
+  std::vector<int> valid;
+  for (int i = 0; i < static_cast<int>(o.depth.size()); ++i)
+    if (o.depth[static_cast<std::size_t>(i)] > 0) valid.push_back(i);
+  const int step = std::max<int>(1, static_cast<int>((valid.size() + limit - 1) / limit));
+  const Eigen::Matrix3d k_inv = o.camera_matrix.inverse();
+  auto point = [&](int column, int row) -> std::optional<Eigen::Vector3d> {
+    if (column < 0 || row < 0 || column >= o.width || row >= o.height) return std::nullopt;
+    const double z = o.depth[static_cast<std::size_t>(row) * o.width + column];
+    if (!(z > 0)) return std::nullopt;
+    return k_inv * Eigen::Vector3d(o.x + column + 0.5, o.y + row + 0.5, 1) * z;
+  };
+  const std::size_t count = (valid.size() + step - 1) / step;
+  Eigen::Matrix3Xd points(3, count), normals = Eigen::Matrix3Xd::Zero(3, count);
+  int n = 0;
+  for (std::size_t j = 0; j < valid.size(); j += step, ++n) {
+    const int column = valid[j] % o.width, row = valid[j] / o.width;
+    points.col(n) = *point(column, row);
+    // Central differences, one-sided at the box's border or next to a pixel without depth.
+    const auto right = point(column + 1, row), left = point(column - 1, row);
+    const auto down = point(column, row + 1), up = point(column, row - 1);
+    const Eigen::Vector3d du = (right ? *right : points.col(n)) - (left ? *left : points.col(n));
+    const Eigen::Vector3d dv = (down ? *down : points.col(n)) - (up ? *up : points.col(n));
+    const Eigen::Vector3d normal = du.cross(dv);
+    if (normal.norm() > 0) normals.col(n) = normal.normalized();
+  }
+  return {points.leftCols(n), normals.leftCols(n)};
+}
+
+// The free-space share of the full model of obj_id at (rotation, translation) over the detection
+// box of `observation`, every pixel of the box (ObjectEstimate::seen_through).
+double free_space_share(SceneEstimator::State& s, int obj_id, const Eigen::Matrix3d& rotation,
+                        const Eigen::Vector3d& translation,
+                        const estimator::BoxObservation& observation) {
+  estimator::BoxObservation box = observation;
+  box.stride = 1;
+  render::TileRequest request;
+  request.intrinsics = scoring_grid_intrinsics(box);
+  request.instance.mesh = &s.models.mesh(obj_id);
+  request.instance.model_to_camera.linear() = rotation;
+  request.instance.model_to_camera.translation() = translation;
+  // Full models need not be closed or outward-wound: no culling.
+  const render::TileAtlas atlas =
+      s.renderer.render_tiles({request}, render::TileOptions{false, false});
+  const cv::Mat depth = atlas.depth(0);
+  std::vector<float> synthetic(static_cast<std::size_t>(box.width) * box.height);
+  for (int r = 0; r < box.height; ++r)
+    for (int c = 0; c < box.width; ++c)
+      synthetic[static_cast<std::size_t>(r) * box.width + c] = depth.at<float>(r, c);
+  return estimator::count_free_space_violations(box, synthetic, s.options.free_space_tolerance_m)
+      .share();
+}
+
+// The refined estimate of a visible object: the fused ICP fits from K belief samples, with the
+// covariance of the fits' information and the belief's spread (support frame), and how far the
+// refinement moved it out of its belief. False (the failure recorded) for non-finite fits.
+bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
+                const estimator::GaussianMixture& belief, std::mt19937_64& rng,
+                ObjectEstimate* object, Eigen::Vector3d* mean, Eigen::Vector3d* variance) {
+  const EstimateOptions& options = s.options;
+  const double threshold_m2 = options.variance_threshold_cm2 * 1e-4;
+  estimator::IcpOptions icp_options;
+  icp_options.max_correspondence_distance = options.icp_max_distance_m;
+  icp_options.cull_back_faces = true;  // ICP runs in the camera frame
+  const estimator::TranslationIcp icp(
+      object->rotation * (s.model_points(object->obj_id).colwise() - object->model_centre),
+      icp_options);
+  const auto [observed, normals] = observed_points(*object->observation, kIcpObservedPoints);
+  const Eigen::MatrixXd starts = estimator::sample_mixture(belief, options.icp_samples, rng);
+  std::vector<Eigen::Vector3d> fits;
+  std::vector<estimator::IcpResult> fit_results;
+  for (int k = 0; k < starts.cols(); ++k) {
+    const Eigen::Vector3d start_camera = frame.support_to_camera * Eigen::Vector3d(starts.col(k));
+    fit_results.push_back(icp.align(observed, start_camera, &normals));
+    // Fits in the support frame, so that variances are per support-frame axis.
+    fits.push_back(frame.camera_to_support * fit_results.back().position);
+  }
+  estimator::FusedEstimate fused;
+  try {
+    fused = estimator::fuse_fits(fits, threshold_m2);
+  } catch (const std::invalid_argument& error) {  // non-finite fits
+    object->failure = std::string("ICP post-processing failed: ") + error.what();
+    object->initial_error_m.reset();
+    return false;
+  }
+  // The fits' information per unit residual variance and the residual variance, averaged
+  // with the fusion weights, in the support frame; the belief's spread (its samples, with
+  // the proposal's kernel floor) bounds what the fits cannot see.
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  double residual_variance = 0;
+  for (std::size_t k = 0; k < fit_results.size(); ++k) {
+    information += fused.weights[static_cast<Eigen::Index>(k)] * fit_results[k].normal_information;
+    residual_variance += fused.weights[static_cast<Eigen::Index>(k)] * fit_results[k].rms_distance *
+                         fit_results[k].rms_distance;
+  }
+  const Eigen::Matrix3d to_support = frame.camera_to_support.linear();
+  const double noise_variance =
+      std::max(residual_variance, options.min_residual_m * options.min_residual_m);
+  information = to_support * information * to_support.transpose() /
+                (options.correlated_pixels * noise_variance);
+  estimator::GaussianMixture spread = belief;
+  spread.variances = Eigen::Vector3d::Constant(options.proposal_min_bandwidth_m *
+                                               options.proposal_min_bandwidth_m);
+  *mean = fused.mean;
+  const Eigen::Matrix3d belief_covariance = estimator::mixture_covariance(spread);
+  *variance =
+      estimator::fused_covariance(fused.covariance, information, belief_covariance).diagonal();
+  // How far the refinement moved the estimate out of its belief: the squared Mahalanobis
+  // distance of the refined mean from the belief's, under both covariances.
+  const Eigen::Vector3d shift = *mean - estimator::mixture_mean(belief);
+  const Eigen::Matrix3d both = belief_covariance + Eigen::Matrix3d(variance->asDiagonal());
+  object->belief_shift = shift.dot(both.ldlt().solve(shift));
+  return true;
+}
+
+// The belief samples of every NBP iteration (camera frame), with keep_history.
+std::vector<std::vector<BeliefSample>> belief_history(const SceneFrame& frame,
+                                                      const estimator::NbpResult& nbp, int node) {
+  std::vector<std::vector<BeliefSample>> history;
+  for (const auto& iteration : nbp.history) {
+    const estimator::GaussianMixture& mixture = iteration[static_cast<std::size_t>(node)];
+    std::vector<BeliefSample> samples;
+    for (int c = 0; c < mixture.size(); ++c)
+      samples.push_back(
+          {frame.support_to_camera * Eigen::Vector3d(mixture.means.col(c)), mixture.weights[c]});
+    history.push_back(std::move(samples));
+  }
+  return history;
+}
+
+}  // namespace
+
+const Eigen::Matrix3Xd& SceneEstimator::State::model_points(int obj_id) {
+  auto found = points.find(obj_id);
+  if (found != points.end()) return found->second;
+  std::mt19937_64 rng(static_cast<std::uint64_t>(obj_id) * 7919u + 17u);
+  return points.emplace(obj_id, surface_points(models.cpu_mesh(obj_id), 3000, rng)).first->second;
+}
+
+void refine_and_fuse(SceneEstimator::State& s, const SceneFrame& frame, const SceneMrf& scene,
+                     const estimator::NbpResult& nbp, std::mt19937_64& rng, ViewEstimate* result) {
+  const EstimateOptions& options = s.options;
+  const double threshold_m2 = options.variance_threshold_cm2 * 1e-4;
+  for (ObjectEstimate& object : result->objects) {
+    const int node = scene.node_of[static_cast<std::size_t>(object.gt_id)];
+    const Eigen::Vector3d truth = frame.support_to_camera * frame.position[object.gt_id];
+    if (node < 0) continue;
+    object.initial_error_m =
+        (frame.support_to_camera * Eigen::Vector3d(estimator::mixture_mean(
+                                       scene.initial[static_cast<std::size_t>(object.gt_id)])) -
+         truth)
+            .norm();
+    const estimator::GaussianMixture& belief = nbp.beliefs[static_cast<std::size_t>(node)];
+    object.effective_sample_size = estimator::effective_sample_size(belief.weights);
+    Eigen::Vector3d mean, variance;  // support frame
+    if (object.amodal) {
+      // A hidden object has nothing of its own to fit (ICP would fit the occluders in its box):
+      // the estimate is the belief's mean, its variance the belief's spread per support-frame
+      // axis (particles and kernels), confident only if that is within the threshold.
+      mean = estimator::mixture_mean(belief);
+      variance = estimator::mixture_covariance(belief).diagonal();
+    } else if (!fit_by_icp(s, frame, belief, rng, &object, &mean, &variance)) {
+      continue;
+    }
+    // Isotropic, so the same in the support frame.
+    variance += estimator::model_misfit_covariance(s.misfit.translation_m,
+                                                   s.misfit.rotation_deg * EIGEN_PI / 180.0,
+                                                   0.5 * s.dataset.model(object.obj_id).diameter)
+                    .diagonal();
+    object.position = frame.support_to_camera * mean;
+    object.variance = variance;
+    object.model_translation = object.position - object.rotation * object.model_centre;
+    if (!object.amodal) {
+      object.seen_through = free_space_share(s, object.obj_id, object.rotation,
+                                             object.model_translation, *object.observation);
+    }
+    object.consistent =
+        (!object.seen_through || *object.seen_through <= options.max_seen_through) &&
+        (!object.belief_shift || *object.belief_shift <= options.max_belief_shift);
+    object.confident = (variance.array() <= threshold_m2).all() && object.consistent;
+    object.error_m = (object.position - truth).norm();
+    object.error_support_m = mean - frame.position[object.gt_id];
+    object.nees = (object.error_support_m->array().square() / variance.array()).sum();
+    if (options.keep_history) object.beliefs = belief_history(frame, nbp, node);
+  }
+}
+
+}  // namespace clutterscope::scene_estimation
