@@ -1,6 +1,7 @@
 #include <cerrno>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/files.hpp>
+#include <sstream>
 #include <system_error>
 
 namespace clutterscope::datasets {
@@ -35,6 +36,24 @@ void rename_checked(const fs::path& from, const fs::path& to) {
   std::error_code error;
   fs::rename(from, to, error);
   if (error) throw WriteError(to, error.message());
+}
+
+std::string read_file(const fs::path& path) {
+  std::ifstream file(path, std::ios::binary);
+  if (!file) throw DatasetError(path, "cannot read file");
+  std::ostringstream contents;
+  contents << file.rdbuf();
+  return contents.str();
+}
+
+nlohmann::json read_json(const fs::path& path, const std::string& remedy) {
+  const std::string text = read_file(path);
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& error) {
+    throw DatasetError(path, std::string("malformed JSON (") + error.what() + ")" +
+                                 (remedy.empty() ? "" : "; " + remedy));
+  }
 }
 
 }  // namespace clutterscope::datasets

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/storage.hpp>
+#include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/random_streams.hpp>
 #include <fstream>
@@ -40,7 +41,7 @@ class FakeSummary : public SummaryBuilder {
   nlohmann::json finish(const BatchTotals& totals) override {
     flush_scene();
     fs::create_directories(out_dir_ / "extra");
-    write_text_atomically(out_dir_ / "extra" / "scenes.txt", scenes_);
+    datasets::write_file_atomically(out_dir_ / "extra" / "scenes.txt", scenes_);
     return {{"command", "fake"},
             {"options", options_},
             {"totals", totals.to_json()},
@@ -109,7 +110,7 @@ struct FakeWorker {
       const std::string relative =
           "extra/" + std::to_string(key.scene_id) + "_" + std::to_string(key.im_id) + ".txt";
       fs::create_directories(out_dir / "extra");
-      write_text_atomically(out_dir / relative, std::to_string(value) + "\n");
+      datasets::write_file_atomically(out_dir / relative, std::to_string(value) + "\n");
       output.files.push_back(relative);
     }
     return output;

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <clutterscope/batch/formats.hpp>
+#include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <cmath>
 #include <limits>
@@ -12,6 +13,31 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
+
+TEST(Formats, ShortestRoundTrip) {
+  EXPECT_EQ(format_shortest(0.25), "0.25");
+  EXPECT_EQ(format_shortest(1.0), "1");
+  EXPECT_EQ(format_shortest(-0.0), "0");
+  EXPECT_EQ(format_shortest(1e-5), "1e-05");
+  EXPECT_EQ(std::stod(format_shortest(0.1 + 0.2)), 0.1 + 0.2);
+}
+
+// Text for people keeps what printf writes, negative zero and non-finite values included.
+TEST(Formats, AsPrintfWrites) {
+  EXPECT_EQ(printf_fixed(0.25, 1), "0.2");
+  EXPECT_EQ(printf_fixed(-1e-9, 2), "-0.00");
+  EXPECT_EQ(printf_fixed(kNaN, 2), "nan");
+  EXPECT_EQ(printf_fixed(-kInf, 0), "-inf");
+  EXPECT_EQ(printf_general(0.000123456), "0.000123456");
+  EXPECT_EQ(printf_general(1234567.0), "1.23457e+06");
+  EXPECT_EQ(printf_general(0.25, 3), "0.25");
+  EXPECT_EQ(printf_general(-0.0, 3), "-0");
+}
+
+TEST(Formats, Hex64) {
+  EXPECT_EQ(format_hex64(255), "00000000000000ff");
+  EXPECT_EQ(format_hex64(~0ull), "ffffffffffffffff");
+}
 
 TEST(Formats, FixedDecimals) {
   EXPECT_EQ(format_fixed(0.25, 6), "0.250000");
@@ -77,8 +103,8 @@ TEST(Formats, JsonNeverHoldsNaN) {
 
 TEST(Formats, AtomicWriteReplacesAndLeavesNoTemporary) {
   const auto dir = testing::fresh_dir("atomic");
-  write_text_atomically(dir / "a.txt", "first");
-  write_text_atomically(dir / "a.txt", "second");
+  datasets::write_file_atomically(dir / "a.txt", "first");
+  datasets::write_file_atomically(dir / "a.txt", "second");
   EXPECT_EQ(testing::read_file(dir / "a.txt"), "second");
   int files = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
@@ -88,9 +114,9 @@ TEST(Formats, AtomicWriteReplacesAndLeavesNoTemporary) {
   EXPECT_EQ(files, 1);
   // Missing folders are created (datasets::write_file_atomically); below a file is a write
   // failure (exit 4), not bad input.
-  write_text_atomically(dir / "missing" / "a.txt", "x");
+  datasets::write_file_atomically(dir / "missing" / "a.txt", "x");
   EXPECT_EQ(testing::read_file(dir / "missing" / "a.txt"), "x");
-  EXPECT_THROW(write_text_atomically(dir / "a.txt" / "below_a_file.txt", "x"),
+  EXPECT_THROW(datasets::write_file_atomically(dir / "a.txt" / "below_a_file.txt", "x"),
                datasets::WriteError);
   write_json_atomically(dir / "b.json", {{"x", kNaN}});
   EXPECT_EQ(testing::read_file(dir / "b.json"), "{\n  \"x\": null\n}\n");

@@ -125,14 +125,6 @@ TEST_F(ReportTables, EstimatesOfEarlierVersionsHaveNoCalibrationColumns) {
   EXPECT_FALSE(objects[0].estimate->confident_radius);
 }
 
-TEST_F(ReportTables, FormatsNumbersInShortestRoundTripForm) {
-  EXPECT_EQ(format_number(0.25), "0.25");
-  EXPECT_EQ(format_number(1.0), "1");
-  EXPECT_EQ(format_number(-0.0), "0");
-  EXPECT_EQ(format_number(1e-5), "1e-05");
-  EXPECT_EQ(std::stod(format_number(0.1 + 0.2)), 0.1 + 0.2);
-}
-
 TEST_F(ReportTables, FailedEstimateRowsHaveNoEstimate) {
   const std::string failed =
       "split,scene_id,im_id,gt_id,obj_id,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,"

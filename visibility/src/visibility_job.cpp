@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/input_digest.hpp>
+#include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/mesh.hpp>
@@ -25,12 +26,6 @@ namespace clutterscope::visibility {
 namespace fs = std::filesystem;
 
 namespace {
-
-constexpr const char* kObjectsHeader =
-    "split,scene_id,im_id,gt_id,obj_id,label,px_count_all,px_count_valid,px_count_visib,"
-    "visib_fract,bbox_obj_x,bbox_obj_y,bbox_obj_w,bbox_obj_h,bbox_visib_x,bbox_visib_y,"
-    "bbox_visib_w,bbox_visib_h";
-constexpr const char* kImagesHeader = "split,scene_id,im_id,n_objects,scene_visibility";
 
 fs::path scene_dir(const datasets::ImageKey& key) {
   return fs::path("bop") / key.split / datasets::six_digits(key.scene_id);
@@ -414,7 +409,7 @@ class VisibilitySummary : public batch::SummaryBuilder {
 batch::BatchOutputSpec visibility_output_spec() {
   batch::BatchOutputSpec spec;
   spec.command = "visibility";
-  spec.tables = {{"objects.csv", kObjectsHeader}, {"images.csv", kImagesHeader}};
+  spec.tables = {batch::visibility_objects_table().spec(), batch::visibility_images_table().spec()};
   spec.make_summary = [](const nlohmann::json& fingerprint, const fs::path& out_dir) {
     return std::make_unique<VisibilitySummary>(fingerprint, out_dir);
   };

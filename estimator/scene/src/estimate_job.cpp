@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/input_digest.hpp>
+#include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/estimator/confidence.hpp>
 #include <clutterscope/render/context.hpp>
@@ -20,12 +21,6 @@ namespace clutterscope::scene_estimation {
 namespace fs = std::filesystem;
 
 namespace {
-
-constexpr const char* kEstimatesHeader =
-    "split,scene_id,im_id,gt_id,obj_id,label,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,"
-    "confident,err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,confident_radius,"
-    "ess_min,seen_through,belief_shift,consistent,time_ms";
-constexpr const char* kBopHeader = "scene_id,im_id,obj_id,score,R,t,time";
 
 class EstimateWorker {
  public:
@@ -68,7 +63,7 @@ class EstimateWorker {
                                 datasets::six_digits(key.scene_id) /
                                 (datasets::six_digits(key.im_id) + ".csv");
       batch::write_output_file(job_.dataset.out, relative,
-                               "gt_id,obj_id,iteration,x_mm,y_mm,z_mm,weight\n" + beliefs);
+                               batch::belief_samples_table().header() + "\n" + beliefs);
       output.files.push_back(relative.generic_string());
     }
     return output;
@@ -323,7 +318,7 @@ class EstimateSummary : public batch::SummaryBuilder {
 batch::BatchOutputSpec estimate_output_spec() {
   batch::BatchOutputSpec spec;
   spec.command = "estimate";
-  spec.tables = {{"estimates.csv", kEstimatesHeader}, {"results_bop.csv", kBopHeader}};
+  spec.tables = {batch::estimates_table().spec(), batch::bop_results_table().spec()};
   spec.make_summary = [](const nlohmann::json& fingerprint, const fs::path&) {
     return std::make_unique<EstimateSummary>(fingerprint);
   };

@@ -1,7 +1,9 @@
+#include <algorithm>
 #include <charconv>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 namespace clutterscope::batch {
@@ -16,13 +18,14 @@ std::string drop_negative_zero(std::string text) {
   return text;
 }
 
+// std::to_chars with a precision formats as printf does in the C locale.
 std::string to_chars_or_throw(double value, std::chars_format format, int precision) {
   char buffer[512];
   const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value, format, precision);
   if (result.ec != std::errc()) {
     throw std::invalid_argument("cannot format number " + std::to_string(value));
   }
-  return drop_negative_zero(std::string(buffer, result.ptr));
+  return std::string(buffer, result.ptr);
 }
 
 }  // namespace
@@ -32,7 +35,7 @@ std::string format_fixed(double value, int decimals) {
   if (decimals < 0 || decimals > 17) {
     throw std::invalid_argument("format_fixed: decimals must be in [0, 17]");
   }
-  return to_chars_or_throw(value, std::chars_format::fixed, decimals);
+  return drop_negative_zero(to_chars_or_throw(value, std::chars_format::fixed, decimals));
 }
 
 std::string format_general(double value, int significant) {
@@ -40,7 +43,29 @@ std::string format_general(double value, int significant) {
   if (significant < 1 || significant > 17) {
     throw std::invalid_argument("format_general: significant digits must be in [1, 17]");
   }
-  return to_chars_or_throw(value, std::chars_format::general, significant);
+  return drop_negative_zero(to_chars_or_throw(value, std::chars_format::general, significant));
+}
+
+std::string format_shortest(double value) {
+  if (value == 0.0) return "0";  // also folds -0 into 0
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return std::string(buffer, result.ptr);
+}
+
+std::string format_hex64(std::uint64_t value) {
+  char text[17];
+  std::snprintf(text, sizeof(text), "%016llx", static_cast<unsigned long long>(value));
+  return text;
+}
+
+std::string printf_fixed(double value, int decimals) {
+  return to_chars_or_throw(value, std::chars_format::fixed, decimals);
+}
+
+std::string printf_general(double value, int significant) {
+  // printf's %.0g is %.1g.
+  return to_chars_or_throw(value, std::chars_format::general, std::max(significant, 1));
 }
 
 std::string csv_escape(std::string_view text) {
@@ -104,7 +129,7 @@ std::string dump_json(const nlohmann::json& value) {
 }
 
 void write_json_atomically(const std::filesystem::path& path, const nlohmann::json& value) {
-  write_text_atomically(path, dump_json(value));
+  datasets::write_file_atomically(path, dump_json(value));
 }
 
 void write_text_atomically(const std::filesystem::path& path, const std::string& contents) {

@@ -3,10 +3,10 @@
 #include <cerrno>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/storage.hpp>
+#include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/files.hpp>
 #include <clutterscope/datasets/random_streams.hpp>
-#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -21,39 +21,22 @@ constexpr int kFormatVersion = 1;
 constexpr std::size_t kMissingExamples = 5;
 constexpr const char* kDigestKey = "digest";
 
-std::string six_digits(int id) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%06d", id);
-  return buffer;
-}
-
 std::string key_name(const ImageKey& key) {
-  return key.split + "/" + six_digits(key.scene_id) + "/" + six_digits(key.im_id);
+  return key.split + "/" + datasets::six_digits(key.scene_id) + "/" +
+         datasets::six_digits(key.im_id);
 }
 
 fs::path batch_dir(const fs::path& root) { return root / ".batch"; }
 fs::path job_path(const fs::path& root) { return batch_dir(root) / "job.json"; }
 fs::path items_path(const fs::path& root) { return batch_dir(root) / "items.tsv"; }
 
-std::string read_text(const fs::path& path) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw datasets::DatasetError(path, "cannot read file");
-  std::ostringstream contents;
-  contents << file.rdbuf();
-  return contents.str();
-}
-
+// Parts and manifests are the runner's own files: one that does not parse is recomputed.
 nlohmann::json read_json(const fs::path& path) {
-  try {
-    return nlohmann::json::parse(read_text(path));
-  } catch (const nlohmann::json::exception& error) {
-    throw datasets::DatasetError(path, std::string("malformed JSON (") + error.what() +
-                                           "); delete this file to recompute it");
-  }
+  return datasets::read_json(path, "delete this file to recompute it");
 }
 
 void copy_file_atomically(const fs::path& from, const fs::path& to) {
-  write_text_atomically(to, read_text(from));
+  datasets::write_file_atomically(to, datasets::read_file(from));
 }
 
 std::string items_text(const std::vector<ImageKey>& items) {
@@ -67,12 +50,6 @@ std::string items_text(const std::vector<ImageKey>& items) {
         key.split + "\t" + std::to_string(key.scene_id) + "\t" + std::to_string(key.im_id) + "\n";
   }
   return text;
-}
-
-std::string hex64(std::uint64_t value) {
-  char buffer[17];
-  std::snprintf(buffer, sizeof(buffer), "%016llx", static_cast<unsigned long long>(value));
-  return buffer;
 }
 
 // A readable account of the first difference between two fingerprints.
@@ -135,8 +112,8 @@ class TableWriter {
 }  // namespace
 
 fs::path part_path(const fs::path& out_dir, const ImageKey& key, PartKind kind) {
-  return batch_dir(out_dir) / "parts" / key.split / six_digits(key.scene_id) /
-         (six_digits(key.im_id) + (kind == PartKind::kOk ? ".json" : ".failed.json"));
+  return batch_dir(out_dir) / "parts" / key.split / datasets::six_digits(key.scene_id) /
+         (datasets::six_digits(key.im_id) + (kind == PartKind::kOk ? ".json" : ".failed.json"));
 }
 
 void write_ok_part(const fs::path& out_dir, const ImageKey& key, const ItemOutput& output,
@@ -145,8 +122,8 @@ void write_ok_part(const fs::path& out_dir, const ImageKey& key, const ItemOutpu
   nlohmann::json part = {
       {"tables", output.tables}, {"summary", output.summary}, {"files", output.files}};
   // "digest" sorts before the other keys, so read_part_digest reads only the file's start.
-  if (input_digest) part[kDigestKey] = hex64(*input_digest);
-  write_text_atomically(path, part.dump() + "\n");
+  if (input_digest) part[kDigestKey] = format_hex64(*input_digest);
+  datasets::write_file_atomically(path, part.dump() + "\n");
   std::error_code ignored;
   fs::remove(part_path(out_dir, key, PartKind::kFailed), ignored);
 }
@@ -167,7 +144,7 @@ std::optional<std::uint64_t> read_part_digest(const fs::path& part) {
 
 void write_failed_part(const fs::path& out_dir, const ImageKey& key, const std::string& message) {
   const fs::path path = part_path(out_dir, key, PartKind::kFailed);
-  write_text_atomically(path, nlohmann::json({{"error", message}}).dump() + "\n");
+  datasets::write_file_atomically(path, nlohmann::json({{"error", message}}).dump() + "\n");
 }
 
 std::string MissingItems::describe() const {
@@ -187,7 +164,7 @@ BatchFolder BatchFolder::prepare(const fs::path& out_dir, const std::string& com
   nlohmann::json fingerprint = {
       {"command", command},
       {"tool_version", CLUTTERSCOPE_VERSION},
-      {"items", {{"count", items.size()}, {"fnv1a64", hex64(datasets::fnv1a64(items_tsv))}}},
+      {"items", {{"count", items.size()}, {"fnv1a64", format_hex64(datasets::fnv1a64(items_tsv))}}},
       {"options", options}};
   if (fs::exists(job_path(out_dir))) {
     BatchFolder existing = open(out_dir);
@@ -200,7 +177,7 @@ BatchFolder BatchFolder::prepare(const fs::path& out_dir, const std::string& com
   }
   datasets::create_folders(batch_dir(out_dir));
   // items.tsv first: a job.json always has its item list next to it.
-  write_text_atomically(items_path(out_dir), items_tsv);
+  datasets::write_file_atomically(items_path(out_dir), items_tsv);
   write_json_atomically(job_path(out_dir),
                         {{"format", kFormatVersion}, {"fingerprint", fingerprint}});
   return BatchFolder(out_dir, std::move(fingerprint));

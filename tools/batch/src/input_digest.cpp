@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/input_digest.hpp>
+#include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
-#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <set>
@@ -86,12 +86,6 @@ bool hash_file(const fs::path& path, std::uint64_t* hash) {
   if (file.bad()) return false;
   *hash = state.digest();
   return true;
-}
-
-std::string hex64(std::uint64_t value) {
-  char text[17];
-  std::snprintf(text, sizeof(text), "%016llx", static_cast<unsigned long long>(value));
-  return text;
 }
 
 // Appends values to a digest in a fixed binary layout.
@@ -298,10 +292,10 @@ void FileDigestCache::save() const {
     for (const auto& [path, entry] : entries_) {
       if (!entry.storable) continue;
       text += std::to_string(entry.size) + "\t" + std::to_string(entry.mtime_ns) + "\t" +
-              hex64(entry.hash) + "\t" + path + "\n";
+              format_hex64(entry.hash) + "\t" + path + "\n";
     }
   }
-  write_text_atomically(store_, text);
+  datasets::write_file_atomically(store_, text);
 }
 
 std::size_t FileDigestCache::files_hashed() const {

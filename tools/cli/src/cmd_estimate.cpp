@@ -131,8 +131,22 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
       "boxes amodal), as the synthetic detector's amodal boxes are");
 }
 
+void add_estimate_options(CLI::App& command, scene_estimation::EstimateJobOptions* arguments) {
+  add_dataset_options(command, &arguments->dataset);
+  add_estimator_options(command, arguments->estimate);
+  command.add_option("--detections", arguments->detections,
+                     "BOP 2D detections JSON (default: the synthetic detector on the rendered "
+                     "GT labels)");
+  command.add_option("--seed", arguments->estimate.seed, "random seed (per-image streams)")
+      ->capture_default_str();
+  command.add_flag("--save-beliefs", arguments->save_beliefs,
+                   "also write the belief samples of every iteration (camera frame, mm)");
+  command.add_flag("--no-time", arguments->no_time,
+                   "leave time_ms empty and BOP time -1, so outputs are byte-reproducible");
+}
+
 void add_estimate_command(CLI::App& app, int* exit_code) {
-  auto arguments = std::make_shared<scene_estimation::EstimateJobOptions>();
+  auto options = std::make_shared<scene_estimation::EstimateJobOptions>();
   CLI::App* command = app.add_subcommand(
       "estimate",
       "Scene estimation by nonparametric belief propagation (paper §III): object positions "
@@ -140,19 +154,9 @@ void add_estimate_command(CLI::App& app, int* exit_code) {
       "non-contact relations, ICP post-processing and confidence. Writes estimates.csv, "
       "results_bop.csv (BOP 6D results), summary.json and, with --save-beliefs, "
       "beliefs/SPLIT/SCENE/IMID.csv.");
-  add_dataset_options(*command, &arguments->dataset);
-  add_estimator_options(*command, arguments->estimate);
-  command->add_option("--detections", arguments->detections,
-                      "BOP 2D detections JSON (default: the synthetic detector on the rendered "
-                      "GT labels)");
-  command->add_option("--seed", arguments->estimate.seed, "random seed (per-image streams)")
-      ->capture_default_str();
-  command->add_flag("--save-beliefs", arguments->save_beliefs,
-                    "also write the belief samples of every iteration (camera frame, mm)");
-  command->add_flag("--no-time", arguments->no_time,
-                    "leave time_ms empty and BOP time -1, so outputs are byte-reproducible");
-  command->callback([arguments, exit_code] {
-    *exit_code = scene_estimation::run_estimate_job(*arguments).exit_code();
+  add_estimate_options(*command, options.get());
+  command->callback([options, exit_code] {
+    *exit_code = scene_estimation::run_estimate_job(*options).exit_code();
   });
 }
 

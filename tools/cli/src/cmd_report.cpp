@@ -1,7 +1,11 @@
-// `clutterscope report`: visibility and estimation of a dataset into one folder, then the
-// clutter report over both (see report_job.hpp).
+// `clutterscope report`: flags -> report::ReportJobOptions and the visibility and estimate
+// jobs' Options -> report::run_report (report/report_job.hpp), which calls the jobs bound here.
 
 #include <CLI/CLI.hpp>
+#include <clutterscope/batch/formats.hpp>
+#include <clutterscope/cli/dataset_options.hpp>
+#include <clutterscope/report/report_job.hpp>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -9,7 +13,6 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "report_job.hpp"
 
 namespace clutterscope::cli {
 
@@ -82,25 +85,129 @@ const std::vector<StepOption>& step_options() {
   return options;
 }
 
+// --split-type, --models-dir and --targets where given, for the steps' command lines.
+void append_dataset_layout_options(const DatasetOptions& dataset, std::vector<std::string>* line) {
+  if (!dataset.split_type.empty()) line->insert(line->end(), {"--split-type", dataset.split_type});
+  if (dataset.models_dir != "models") {
+    line->insert(line->end(), {"--models-dir", dataset.models_dir});
+  }
+  if (!dataset.targets.empty()) line->insert(line->end(), {"--targets", dataset.targets});
+}
+
+void append_given(const report::GivenOptions& given, std::vector<std::string>* line) {
+  for (const auto& [name, value] : given) {
+    line->push_back(name);
+    if (!value.empty()) line->push_back(value);
+  }
+}
+
+// The command line of one step as `clutterscope STEP` would take it: "STEP DATASET --out
+// DIR/STEP", the dataset selection, --jobs, --keep-going, --quiet and the given options; for
+// estimate also the report's threshold, seed and radius, which are the estimator's too.
+std::vector<std::string> step_command_line(const report::ReportJobOptions& options,
+                                           const std::string& step) {
+  const DatasetOptions& dataset = options.dataset;
+  std::vector<std::string> line = {
+      step,      dataset.dataset, "--out",  (std::filesystem::path(dataset.out) / step).string(),
+      "--split", dataset.split,   "--jobs", std::to_string(dataset.jobs)};
+  if (!dataset.scenes.empty()) line.insert(line.end(), {"--scenes", dataset.scenes});
+  if (!dataset.images.empty()) line.insert(line.end(), {"--images", dataset.images});
+  append_dataset_layout_options(dataset, &line);
+  if (dataset.keep_going) line.push_back("--keep-going");
+  if (dataset.quiet) line.push_back("--quiet");
+  if (step == "estimate") {
+    append_given(options.estimate_given, &line);
+    const report::ReportOptions& analysis = options.analysis;
+    line.insert(line.end(), {"--variance-threshold-cm2",
+                             batch::format_shortest(analysis.variance_threshold_cm2), "--seed",
+                             std::to_string(analysis.seed)});
+    if (analysis.confidence_radius_cm) {
+      line.insert(line.end(), {"--confidence-radius-cm",
+                               batch::format_shortest(*analysis.confidence_radius_cm)});
+    }
+  } else {
+    append_given(options.visibility_given, &line);
+  }
+  return line;
+}
+
+// Parses a step's command line with the step's own option definitions into its flags: a bad
+// value is the CLI11 error `clutterscope STEP` gives (exit 2).
+template <class Flags>
+void parse_step_flags(const std::vector<std::string>& command_line,
+                      void (*add_options)(CLI::App&, Flags*), Flags* flags) {
+  CLI::App app;
+  add_options(*app.add_subcommand(command_line.front()), flags);
+  std::vector<std::string> reversed(command_line.rbegin(), command_line.rend());
+  app.parse(reversed);
+}
+
+// The jobs' options from the report's flags, checked before either step starts, and the steps
+// bound to them.
+class BoundSteps {
+ public:
+  explicit BoundSteps(const report::ReportJobOptions& options) {
+    parse_step_flags(step_command_line(options, "estimate"), &add_estimate_options, &estimate_);
+    VisibilityFlags visibility;
+    parse_step_flags(step_command_line(options, "visibility"), &add_visibility_options,
+                     &visibility);
+    visibility_ = visibility.options();
+  }
+
+  report::ReportSteps steps() const {
+    report::ReportSteps steps;
+    steps.visibility = [this](const std::filesystem::path& out) {
+      visibility::VisibilityJobOptions job = visibility_;
+      job.dataset.out = out.string();
+      return visibility::run_visibility_job(job);
+    };
+    steps.estimate = [this](const std::filesystem::path& out) {
+      scene_estimation::EstimateJobOptions job = estimate_;
+      job.dataset.out = out.string();
+      return scene_estimation::run_estimate_job(job);
+    };
+    // The estimate step's options on one image, alone on one worker, quietly.
+    steps.beliefs = [this](const datasets::ImageKey& image, const std::filesystem::path& out) {
+      scene_estimation::EstimateJobOptions job = estimate_;
+      job.dataset.out = out.string();
+      job.dataset.scenes = std::to_string(image.scene_id);
+      job.dataset.images = std::to_string(image.im_id);
+      job.dataset.jobs = 1;
+      job.dataset.quiet = true;
+      job.save_beliefs = true;
+      return scene_estimation::run_estimate_job(job);
+    };
+    return steps;
+  }
+
+ private:
+  scene_estimation::EstimateJobOptions estimate_;
+  visibility::VisibilityJobOptions visibility_;
+};
+
 struct ReportCommandState {
-  ReportArguments arguments;
+  report::ReportJobOptions options;
   std::map<std::string, std::string> values;  // forwarded value options as typed
   std::map<std::string, bool> flags;
   bool no_notebook = false;
 };
 
 void run_report_command(CLI::App& command, ReportCommandState& state, int* exit_code) {
-  ReportArguments arguments = state.arguments;
-  arguments.notebook = !state.no_notebook;
+  report::ReportJobOptions options = state.options;
+  options.notebook = !state.no_notebook;
   for (const StepOption& option : step_options()) {
     if (command.get_option(option.name)->count() == 0) continue;
     const std::string step = option.step;
     const std::string value = option.flag ? "" : state.values[option.name];
-    if (step != "visibility") arguments.estimate[option.name] = value;
-    if (step != "estimate") arguments.visibility[option.name] = value;
+    if (step != "visibility") options.estimate_given[option.name] = value;
+    if (step != "estimate") options.visibility_given[option.name] = value;
   }
+  std::string why;
+  if (!options.IsValid(&why)) throw batch::UsageError(why);
+  // Every option of both steps is checked before either step starts work.
+  const BoundSteps steps(options);
   // Each step's runner reports its computed and reused images on stderr (and in run.json).
-  const ReportRun run = run_report(arguments);
+  const report::ReportRun run = report::run_report(options, steps.steps());
   std::cout << run.files.report_html.string() << "\n" << run.console_summary;
   *exit_code = run.exit_code;
 }
@@ -109,7 +216,7 @@ void run_report_command(CLI::App& command, ReportCommandState& state, int* exit_
 
 void add_report_command(CLI::App& app, int* exit_code) {
   auto state = std::make_shared<ReportCommandState>();
-  ReportArguments& arguments = state->arguments;
+  report::ReportJobOptions& options = state->options;
   CLI::App* command = app.add_subcommand(
       "report",
       "The clutter report of a dataset: runs visibility and estimation into DIR/visibility and "
@@ -117,8 +224,8 @@ void add_report_command(CLI::App& app, int* exit_code) {
       "objects.csv, images.csv, summary.json, report.html, plots/ and clutter_report.ipynb "
       "into DIR and prints the path of report.html and a five-line summary. A folder holding a "
       "report of another dataset or other options is refused.");
-  add_dataset_options(*command, &arguments.dataset);
-  report::ReportOptions& analysis = arguments.analysis;
+  add_dataset_options(*command, &options.dataset);
+  report::ReportOptions& analysis = options.analysis;
   command
       ->add_option("--accurate-cm", analysis.accurate_cm,
                    "an estimate is accurate when its position error is at most this (cm)")

@@ -5,10 +5,9 @@
 // exit code (0, or 1 for --keep-going failures) is stored in *exit_code.
 
 #include <CLI/CLI.hpp>
-
-namespace clutterscope::scene_estimation {
-struct EstimateOptions;
-}
+#include <clutterscope/scene_estimation/estimate_job.hpp>
+#include <clutterscope/visibility/visibility_job.hpp>
+#include <string>
 
 namespace clutterscope::cli {
 
@@ -21,6 +20,21 @@ void add_nbp_options(CLI::App& command, scene_estimation::EstimateOptions& optio
 // threshold, --confidence-radius-cm, the unary, bandwidth, scoring models, --observation and the
 // depth checks): `estimate` and `bench calibration` take the same estimator options.
 void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions& options);
+
+// The flags of `visibility`: the job's options, with --mode and --pixel-center as the names
+// CLI11 checked.
+struct VisibilityFlags {
+  visibility::VisibilityJobOptions job;
+  std::string mode = "rendered";
+  std::string pixel_center = "half";
+  // The job's options with the mode and pixel centre that the names select.
+  visibility::VisibilityJobOptions options() const;
+};
+// Every option of `visibility` (the dataset selection included) and of `estimate`, without
+// the command itself: `report` parses its steps' options with these, so a forwarded value is
+// validated exactly as the step's own command validates it.
+void add_visibility_options(CLI::App& command, VisibilityFlags* flags);
+void add_estimate_options(CLI::App& command, scene_estimation::EstimateJobOptions* options);
 
 void add_render_command(CLI::App& app, int* exit_code);
 void add_merge_command(CLI::App& app, int* exit_code);

@@ -1,5 +1,7 @@
 #include <algorithm>
 #include <cctype>
+#include <clutterscope/batch/formats.hpp>
+#include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/report/beliefs.hpp>
 #include <cmath>
 #include <cstdio>
@@ -10,11 +12,7 @@ namespace clutterscope::report {
 
 namespace {
 
-std::string percent(double fraction) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.1f%%", 100.0 * fraction);
-  return buffer;
-}
+std::string percent(double fraction) { return batch::printf_fixed(100.0 * fraction, 1) + "%"; }
 
 std::string image_id(const ImageSummary& image) {
   return image.split + " scene " + std::to_string(image.scene_id) + " image " +
@@ -33,8 +31,7 @@ std::string list_text(const std::vector<int>& values) {
 }  // namespace
 
 std::vector<BeliefSampleRow> read_beliefs_csv(const std::filesystem::path& path) {
-  const CsvTable table =
-      CsvTable::read(path, {"gt_id", "obj_id", "iteration", "x_mm", "y_mm", "z_mm", "weight"});
+  const CsvTable table = CsvTable::read(path, batch::belief_samples_table().required_columns());
   std::vector<BeliefSampleRow> rows;
   rows.reserve(table.records().size());
   for (const CsvRecord& record : table.records()) {
@@ -153,8 +150,7 @@ NamedPlot belief_plot(const BeliefImage& figure, double variance_threshold_cm2) 
   const ImageSummary& image = figure.image;
   NamedPlot plot;
   plot.name = belief_plot_name(image);
-  char threshold[32];
-  std::snprintf(threshold, sizeof(threshold), "%g", variance_threshold_cm2);
+  const std::string threshold = batch::printf_general(variance_threshold_cm2);
   plot.caption = "Belief samples of the " + std::to_string(drawn) + " estimated objects of " +
                  image_id(image) + " (scene visibility " + percent(image.scene_visibility) +
                  ") projected on its " + figure.background_kind +

@@ -170,14 +170,4 @@ std::optional<double> CsvTable::optional_non_negative(const CsvRecord& record,
   return value;
 }
 
-std::string csv_escape(const std::string& field) {
-  if (field.find_first_of(",\"\n\r") == std::string::npos) return field;
-  std::string quoted = "\"";
-  for (char c : field) {
-    if (c == '"') quoted += '"';
-    quoted += c;
-  }
-  return quoted + "\"";
-}
-
 }  // namespace clutterscope::report

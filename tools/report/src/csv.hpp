@@ -49,7 +49,4 @@ class CsvTable {
   std::vector<CsvRecord> records_;
 };
 
-// Quotes a field when it holds a comma, quote or line break.
-std::string csv_escape(const std::string& field);
-
 }  // namespace clutterscope::report

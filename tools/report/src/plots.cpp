@@ -1,7 +1,12 @@
 #include <algorithm>
+#include <cctype>
+#include <clutterscope/batch/formats.hpp>
 #include <clutterscope/report/plots.hpp>
+#include <clutterscope/report/report.hpp>
 #include <cmath>
 #include <cstdio>
+
+#include "report_text.hpp"
 
 namespace clutterscope::report {
 
@@ -9,11 +14,7 @@ namespace {
 
 constexpr int kHistogramBins = 20;
 
-std::string format_g(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%g", value);
-  return buffer;
-}
+std::string format_g(double value) { return batch::printf_general(value); }
 
 }  // namespace
 
@@ -69,17 +70,16 @@ std::string threshold_sweep_plot(const ThresholdAnalysis& analysis) {
       "chosen " + format_g(analysis.options.chosen_threshold_cm2) + " cm\u00b2");
   const Statistic& recommended = analysis.recommendation.largest_with_min_precision;
   if (recommended.defined()) {
-    char label[64];
-    std::snprintf(label, sizeof(label), "recommended %.3g cm\u00b2", *recommended.value);
-    chart.add_vertical_line(*recommended.value, svg::category_colour(4), label);
+    chart.add_vertical_line(
+        *recommended.value, svg::category_colour(4),
+        "recommended " + batch::printf_general(*recommended.value, 3) + " cm\u00b2");
   }
   if (analysis.chosen_radius) {
     // The radius decision is the variance threshold R^2 / chi2_3(0.95): the same curves.
-    char label[96];
-    std::snprintf(label, sizeof(label), "radius %g cm (= %.3g cm\u00b2)",
-                  analysis.chosen_radius->radius_cm, analysis.chosen_radius->row.threshold_cm2);
-    chart.add_vertical_line(analysis.chosen_radius->row.threshold_cm2, svg::category_colour(5),
-                            label);
+    chart.add_vertical_line(
+        analysis.chosen_radius->row.threshold_cm2, svg::category_colour(5),
+        "radius " + format_g(analysis.chosen_radius->radius_cm) + " cm (= " +
+            batch::printf_general(analysis.chosen_radius->row.threshold_cm2, 3) + " cm\u00b2)");
   }
   return chart.render();
 }
@@ -134,14 +134,70 @@ std::string image_visibility_plot(const std::string& title,
   std::vector<svg::Bar> bars;
   for (size_t i = 0; i < image_objects.size(); ++i) {
     const ObjectRow& object = image_objects[i];
-    char percent[16];
-    std::snprintf(percent, sizeof(percent), "%.0f%%", 100.0 * object.visib_fract);
+    const std::string percent = batch::printf_fixed(100.0 * object.visib_fract, 0) + "%";
     const bool low = object.visib_fract < visibility_cutoff;
     bars.push_back({object.label + " (gt " + std::to_string(object.gt_id) + ")",
                     100.0 * object.visib_fract, svg::category_colour(static_cast<int>(i)), percent,
                     low ? svg::warning_red() : svg::Colour{0, 0, 0}});
   }
   return svg::bar_chart(title, bars, {"object visibility V_i (%)", false, 0.0, 100.0});
+}
+
+std::vector<NamedPlot> standard_plots(const std::vector<ObjectRow>& objects,
+                                      const ReportAnalysis& analysis) {
+  const ReportOptions& options = analysis.options;
+  std::vector<NamedPlot> plots;
+  plots.push_back(
+      {"variance_vs_visibility",
+       "Max-axis belief variance against object visibility, coloured by position "
+       "error; dashed: the variance threshold.",
+       variance_visibility_plot(objects, options.variance_threshold_cm2, options.accurate_cm)});
+  plots.push_back({"threshold_sweep",
+                   "Precision, recall and F1 of \"confident\" (every axis variance \u2264 T) "
+                   "against \"accurate\" over the swept thresholds.",
+                   threshold_sweep_plot(analysis.thresholds)});
+  if (analysis.calibration.has_nees) {
+    plots.push_back({"calibration",
+                     "Nominal against observed coverage of the 3-D error ellipsoids (share of "
+                     "estimates with NEES \u2264 the chi-square 3-dof quantile) for all and for "
+                     "confident estimates; dashed: honest variances.",
+                     calibration_plot(analysis.calibration.all, analysis.calibration.confident,
+                                      analysis.calibration.confident_radius)});
+  }
+  plots.push_back({"visibility_histogram", "Distribution of object visibility V_i (Eq. 10).",
+                   visibility_histogram_plot(objects, options.visibility_cutoff)});
+
+  // Most cluttered images first (lowest V^s), ties in key order.
+  std::vector<const ImageSummary*> order;
+  for (const ImageSummary& image : analysis.images) order.push_back(&image);
+  std::stable_sort(order.begin(), order.end(), [](const auto* a, const auto* b) {
+    return a->scene_visibility < b->scene_visibility;
+  });
+  order.resize(std::min<size_t>(order.size(), options.images_with_bars));
+  for (const ImageSummary* image : order) {
+    std::vector<ObjectRow> image_objects;
+    for (const ObjectRow& object : objects) {
+      if (image_key(object) == ImageKey(image->split, image->scene_id, image->im_id)) {
+        image_objects.push_back(object);
+      }
+    }
+    const std::string id = image->split + " scene " + std::to_string(image->scene_id) + " image " +
+                           std::to_string(image->im_id);
+    std::string name = "image_visibility_" + image->split + "_" + std::to_string(image->scene_id) +
+                       "_" + std::to_string(image->im_id);
+    for (char& ch : name) {
+      if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '_' && ch != '-') ch = '_';
+      ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    }
+    plots.push_back({name,
+                     "Objects of " + id + " with their visibility (red below " +
+                         printf_fixed(100.0 * options.visibility_cutoff, 0) +
+                         "%); scene visibility " +
+                         printf_fixed(100.0 * image->scene_visibility, 1) + "%.",
+                     image_visibility_plot("Visibility of the objects in " + id, image_objects,
+                                           options.visibility_cutoff)});
+  }
+  return plots;
 }
 
 }  // namespace clutterscope::report

@@ -1,4 +1,6 @@
 #include <charconv>
+#include <clutterscope/batch/formats.hpp>
+#include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/report/calibration.hpp>
 #include <clutterscope/report/tables.hpp>
@@ -15,15 +17,14 @@ namespace clutterscope::report {
 
 namespace {
 
-const std::vector<std::string> kVisibilityColumns = {
-    "split",        "scene_id",     "im_id",          "gt_id",          "obj_id",
-    "label",        "px_count_all", "px_count_valid", "px_count_visib", "visib_fract",
-    "bbox_obj_x",   "bbox_obj_y",   "bbox_obj_w",     "bbox_obj_h",     "bbox_visib_x",
-    "bbox_visib_y", "bbox_visib_w", "bbox_visib_h"};
-
-// Estimate columns shared by estimates.csv and the joined objects.csv.
-const std::vector<std::string> kEstimateColumns = {
-    "x_mm", "y_mm", "z_mm", "var_x_cm2", "var_y_cm2", "var_z_cm2", "confident", "err_cm"};
+// A joined objects.csv (a report's) has the required estimate columns besides the visibility
+// columns.
+bool has_estimate_columns(const CsvTable& table) {
+  for (const std::string& column : batch::report_objects_table().required_columns()) {
+    if (!table.has_column(column)) return false;
+  }
+  return true;
+}
 
 std::optional<PoseEstimate> parse_estimate(const CsvTable& table, const CsvRecord& record) {
   // A failed estimate is recorded with empty numeric columns.
@@ -74,17 +75,9 @@ bool PoseEstimate::confident_within(double radius_cm) const {
 
 double PoseEstimate::radius95_cm() const { return report::radius95_cm(max_variance_cm2()); }
 
-std::string format_number(double value) {
-  if (value == 0.0) return "0";  // also folds -0 into 0
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
-}
-
 std::vector<ObjectRow> read_objects_csv(const std::filesystem::path& path) {
-  const CsvTable table = CsvTable::read(path, kVisibilityColumns);
-  bool with_estimates = true;
-  for (const auto& column : kEstimateColumns) with_estimates &= table.has_column(column);
+  const CsvTable table = CsvTable::read(path, batch::visibility_objects_table().required_columns());
+  const bool with_estimates = has_estimate_columns(table);
   std::vector<ObjectRow> rows;
   rows.reserve(table.records().size());
   std::set<Key> seen;
@@ -118,17 +111,12 @@ std::vector<ObjectRow> read_objects_csv(const std::filesystem::path& path) {
 }
 
 bool objects_csv_has_estimates(const std::filesystem::path& path) {
-  const CsvTable table = CsvTable::read(path, kVisibilityColumns);
-  for (const auto& column : kEstimateColumns) {
-    if (!table.has_column(column)) return false;
-  }
-  return true;
+  return has_estimate_columns(
+      CsvTable::read(path, batch::visibility_objects_table().required_columns()));
 }
 
 std::vector<EstimateRow> read_estimates_csv(const std::filesystem::path& path) {
-  std::vector<std::string> required = {"split", "scene_id", "im_id", "gt_id", "obj_id"};
-  required.insert(required.end(), kEstimateColumns.begin(), kEstimateColumns.end());
-  const CsvTable table = CsvTable::read(path, required);
+  const CsvTable table = CsvTable::read(path, batch::estimates_table().required_columns());
   std::vector<EstimateRow> rows;
   rows.reserve(table.records().size());
   for (const CsvRecord& record : table.records()) {
@@ -145,8 +133,7 @@ std::vector<EstimateRow> read_estimates_csv(const std::filesystem::path& path) {
 }
 
 std::vector<ImageVisibilityRow> read_images_csv(const std::filesystem::path& path) {
-  const CsvTable table =
-      CsvTable::read(path, {"split", "scene_id", "im_id", "n_objects", "scene_visibility"});
+  const CsvTable table = CsvTable::read(path, batch::visibility_images_table().required_columns());
   std::vector<ImageVisibilityRow> rows;
   for (const CsvRecord& record : table.records()) {
     ImageVisibilityRow row;
@@ -194,30 +181,26 @@ void join_estimates(std::vector<ObjectRow>& objects, const std::vector<EstimateR
 
 std::string format_objects_csv(const std::vector<ObjectRow>& objects) {
   std::ostringstream out;
-  for (size_t i = 0; i < kVisibilityColumns.size(); ++i) {
-    out << (i ? "," : "") << kVisibilityColumns[i];
-  }
-  out << ",x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,max_var_cm2,confident,err_cm,"
-         "init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,confident_radius,ess_min,time_"
-         "ms,consistent\n";
+  out << batch::report_objects_table().header() << '\n';
   const auto optional = [](const std::optional<double>& value) {
-    return value ? format_number(*value) : std::string();
+    return value ? batch::format_shortest(*value) : std::string();
   };
   for (const ObjectRow& row : objects) {
-    out << csv_escape(row.split) << ',' << row.scene_id << ',' << row.im_id << ',' << row.gt_id
-        << ',' << row.obj_id << ',' << csv_escape(row.label) << ',' << row.px_count_all << ','
-        << row.px_count_valid << ',' << row.px_count_visib << ',' << format_number(row.visib_fract);
+    out << batch::csv_escape(row.split) << ',' << row.scene_id << ',' << row.im_id << ','
+        << row.gt_id << ',' << row.obj_id << ',' << batch::csv_escape(row.label) << ','
+        << row.px_count_all << ',' << row.px_count_valid << ',' << row.px_count_visib << ','
+        << batch::format_shortest(row.visib_fract);
     for (int value : row.bbox_obj) out << ',' << value;
     for (int value : row.bbox_visib) out << ',' << value;
     if (row.estimate) {
       const PoseEstimate& e = *row.estimate;
-      out << ',' << format_number(e.x_mm) << ',' << format_number(e.y_mm) << ','
-          << format_number(e.z_mm) << ',' << format_number(e.var_x_cm2) << ','
-          << format_number(e.var_y_cm2) << ',' << format_number(e.var_z_cm2) << ','
-          << format_number(e.max_variance_cm2()) << ',' << (e.confident ? 1 : 0) << ','
-          << optional(e.err_cm) << ',' << optional(e.init_err_cm) << ',' << optional(e.err_x_cm)
-          << ',' << optional(e.err_y_cm) << ',' << optional(e.err_z_cm) << ',' << optional(e.nees)
-          << ',' << format_number(e.radius95_cm()) << ','
+      out << ',' << batch::format_shortest(e.x_mm) << ',' << batch::format_shortest(e.y_mm) << ','
+          << batch::format_shortest(e.z_mm) << ',' << batch::format_shortest(e.var_x_cm2) << ','
+          << batch::format_shortest(e.var_y_cm2) << ',' << batch::format_shortest(e.var_z_cm2)
+          << ',' << batch::format_shortest(e.max_variance_cm2()) << ',' << (e.confident ? 1 : 0)
+          << ',' << optional(e.err_cm) << ',' << optional(e.init_err_cm) << ','
+          << optional(e.err_x_cm) << ',' << optional(e.err_y_cm) << ',' << optional(e.err_z_cm)
+          << ',' << optional(e.nees) << ',' << batch::format_shortest(e.radius95_cm()) << ','
           << (e.confident_radius ? (*e.confident_radius ? "1" : "0") : "") << ','
           << optional(e.ess_min) << ',' << optional(e.time_ms) << ',' << (e.consistent ? 1 : 0);
     } else {

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <clutterscope/batch/formats.hpp>
 #include <clutterscope/report/calibration.hpp>
 #include <clutterscope/report/thresholds.hpp>
 #include <cmath>
@@ -15,16 +16,12 @@ namespace {
 constexpr double kMergeRelativeDistance = 0.03;
 
 double round_significant(double value, int digits) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.*g", digits, value);
-  return std::strtod(buffer, nullptr);
+  return std::strtod(batch::printf_general(value, digits).c_str(), nullptr);
 }
 
 std::string text(const Statistic& statistic, int decimals = 3) {
   if (!statistic.defined()) return "n/a (" + statistic.undefined_reason + ")";
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, *statistic.value);
-  return buffer;
+  return batch::printf_fixed(*statistic.value, decimals);
 }
 
 Statistic ratio(int numerator, int denominator, const char* reason) {
@@ -173,10 +170,8 @@ RadiusRow evaluate_radius(const std::vector<ObjectRow>& objects, double radius_c
 ThresholdRecommendation recommend_threshold(const std::vector<ThresholdRow>& sweep,
                                             double min_precision) {
   ThresholdRecommendation recommendation;
-  char target[32];
-  std::snprintf(target, sizeof(target), "%g", min_precision);
-  recommendation.largest_with_min_precision =
-      Statistic::undefined(std::string("no swept threshold reaches precision ") + target);
+  recommendation.largest_with_min_precision = Statistic::undefined(
+      "no swept threshold reaches precision " + batch::printf_general(min_precision));
   recommendation.best_f1 = Statistic::undefined("F1 is undefined at every swept threshold");
   recommendation.best_f1_value = recommendation.best_f1;
   for (const ThresholdRow& row : sweep) {  // ascending thresholds: later wins ties

@@ -1,10 +1,11 @@
 #pragma once
 
-// Checked output primitives shared by every library that writes files: each failure throws
-// WriteError (exit 4) naming the file and the system's reason.
+// File helpers shared by every library: checked output primitives (each failure throws
+// WriteError, exit 4, naming the file and the system's reason) and whole-file reading.
 
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 namespace clutterscope::datasets {
@@ -23,6 +24,13 @@ void close_checked(std::ofstream& stream, const std::filesystem::path& file);
 
 // Renames `from` to `to` (atomic within one file system); WriteError naming `to` otherwise.
 void rename_checked(const std::filesystem::path& from, const std::filesystem::path& to);
+
+// The whole file as bytes. Throws DatasetError naming `path` when it cannot be read.
+std::string read_file(const std::filesystem::path& path);
+
+// The file parsed as JSON. Throws DatasetError naming `path` when it cannot be read or is not
+// JSON: "malformed JSON (the parser's message)", followed by "; " and `remedy` when given.
+nlohmann::json read_json(const std::filesystem::path& path, const std::string& remedy = "");
 
 // The marker file `clutterscope generate` writes first into the folder it builds a dataset
 // in and removes just before renaming the complete folder into place. A dataset folder that

@@ -1,8 +1,10 @@
 #pragma once
 
-// Deterministic, locale-independent CSV and JSON writing for every table and summary the tools
-// produce. Numbers never come out as NaN or inf: CSV leaves the field empty, JSON writes null.
+// Deterministic, locale-independent number, CSV and JSON writing for every table, summary and
+// page the tools produce. In tables numbers never come out as NaN or inf: CSV leaves the field
+// empty, JSON writes null.
 
+#include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -10,11 +12,24 @@
 
 namespace clutterscope::batch {
 
+// Table fields.
 // `value` with exactly `decimals` digits after the point ("0.250000"); "" if not finite.
 std::string format_fixed(double value, int decimals);
 // `value` with `significant` significant digits, like printf's %g ("1.5e-07", "12.5");
 // "" if not finite.
 std::string format_general(double value, int significant = 6);
+// The shortest text that reads back as the same double ("0.25", "1e-05", "0" for -0): tables
+// that are read and written again keep their bytes.
+std::string format_shortest(double value);
+
+// A 64-bit digest as 16 lower-case hex digits ("00000000000000ff").
+std::string format_hex64(std::uint64_t value);
+
+// Text for people (HTML, SVG, console): exactly what printf("%.*f") and printf("%.*g") write
+// in the C locale, "-0.0", "nan" and "inf" included, but independent of the process locale.
+std::string printf_fixed(double value, int decimals);
+std::string printf_general(double value, int significant = 6);
+
 // A CSV field: quoted (with doubled quotes) only when it holds ',', '"', '\n' or '\r'.
 std::string csv_escape(std::string_view text);
 
@@ -47,10 +62,10 @@ nlohmann::json json_number(double value);
 nlohmann::json json_rounded(double value, int decimals);
 // Serialises with 2-space indent and a final newline; non-finite numbers become null.
 std::string dump_json(const nlohmann::json& value);
-// Writes `contents` to `path` atomically: datasets::write_file_atomically (a unique temporary
-// file in the same folder, then rename). Throws datasets::WriteError (exit 4) on I/O failure.
+// Kept for the commands that still call it: use datasets::write_file_atomically (a unique
+// temporary file in the same folder, then rename; datasets::WriteError, exit 4, on failure).
 void write_text_atomically(const std::filesystem::path& path, const std::string& contents);
-// dump_json written atomically (temporary file + rename).
+// dump_json written with datasets::write_file_atomically.
 void write_json_atomically(const std::filesystem::path& path, const nlohmann::json& value);
 
 }  // namespace clutterscope::batch

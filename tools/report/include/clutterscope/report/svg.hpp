@@ -10,6 +10,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <iosfwd>
 #include <optional>
 #include <string>
 #include <vector>
@@ -72,6 +73,13 @@ class Chart {
   std::string render() const;
 
  private:
+  // The steps of render(), over the plot area and scales of one render (svg_chart.cpp).
+  struct Layout;
+  Layout layout() const;
+  void render_axes(std::ostream& out, const Layout& layout) const;
+  void render_series(std::ostream& out, const Layout& layout) const;
+  void render_side_panel(std::ostream& out, const Layout& layout) const;
+
   enum class Kind { kValueScatter, kScatter, kLine, kHorizontalLine, kVerticalLine, kHistogram };
   struct Series {
     Kind kind = Kind::kScatter;

@@ -103,10 +103,8 @@ void join_estimates(std::vector<ObjectRow>& objects, const std::vector<EstimateR
 // The joined table as CSV: the visibility columns, then x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,
 // var_z_cm2,max_var_cm2,confident,err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,
 // radius95_cm,confident_radius,ess_min,time_ms,consistent (empty when absent).
-// Numbers use the shortest round-trip form, so reading and writing again gives equal bytes.
+// Numbers use the shortest round-trip form (batch::format_shortest), so reading and writing again
+// gives equal bytes.
 std::string format_objects_csv(const std::vector<ObjectRow>& objects);
-
-// Shortest decimal text that reads back as the same double ("0.25", "1e-05").
-std::string format_number(double value);
 
 }  // namespace clutterscope::report

@@ -1,0 +1,94 @@
+// The report pipeline with fake steps (no GL): options are checked before any step runs, the
+// folder's job fingerprint keys the steps' options as given, and a folder of another job is
+// refused.
+
+#include <gtest/gtest.h>
+
+#include <clutterscope/report/report_job.hpp>
+#include <fstream>
+
+#include "test_folders.hpp"
+
+namespace clutterscope::report {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Steps that only count their calls.
+struct CountingSteps {
+  int calls = 0;
+  ReportSteps steps() {
+    ReportSteps steps;
+    const auto count = [this](const fs::path&) {
+      ++calls;
+      return batch::BatchResult();
+    };
+    steps.visibility = count;
+    steps.estimate = count;
+    steps.beliefs = [this](const datasets::ImageKey&, const fs::path&) {
+      ++calls;
+      return batch::BatchResult();
+    };
+    return steps;
+  }
+};
+
+ReportJobOptions options_into(const fs::path& out) {
+  ReportJobOptions options;
+  options.dataset.dataset = out.string();
+  options.dataset.out = (out / "report").string();
+  options.dataset.jobs = 1;
+  return options;
+}
+
+TEST(ReportJob, InvalidOptionsAreRefusedBeforeAnyStep) {
+  const fs::path root = testing::fresh_dir("report_job_invalid");
+  CountingSteps counting;
+  ReportJobOptions sharded = options_into(root);
+  sharded.dataset.shard = "0/2";
+  EXPECT_THROW(run_report(sharded, counting.steps()), batch::UsageError);
+  ReportJobOptions bad_analysis = options_into(root);
+  bad_analysis.analysis.accurate_cm = -1.0;
+  std::string why;
+  EXPECT_FALSE(bad_analysis.IsValid(&why));
+  EXPECT_THROW(run_report(bad_analysis, counting.steps()), batch::UsageError);
+  EXPECT_EQ(counting.calls, 0);
+  EXPECT_FALSE(fs::exists(root / "report"));
+}
+
+TEST(ReportJob, FingerprintKeysTheGivenOptionsInCanonicalForm) {
+  ReportJobOptions options = options_into(testing::fresh_dir("report_job_fingerprint"));
+  options.visibility_given = {{"--delta-mm", "15.0"}, {"--masks", ""}};
+  options.estimate_given = {{"--particles", "40"}};
+  const nlohmann::json fingerprint = report_fingerprint(options);
+  EXPECT_EQ(fingerprint["command"], "report");
+  EXPECT_EQ(fingerprint["visibility"]["--delta-mm"], "15");
+  EXPECT_EQ(fingerprint["visibility"]["--masks"], "");
+  EXPECT_EQ(fingerprint["estimate"]["--particles"], "40");
+  EXPECT_EQ(fingerprint["estimate"]["--variance-threshold-cm2"], "0.25");
+  EXPECT_EQ(fingerprint["estimate"]["--seed"], "1");
+  EXPECT_FALSE(fingerprint["estimate"].contains("--confidence-radius-cm"));
+}
+
+TEST(ReportJob, AFolderOfAnotherJobIsRefusedOnceAStepStarted) {
+  const fs::path root = testing::fresh_dir("report_job_other");
+  ReportJobOptions options = options_into(root);
+  const fs::path dir = options.dataset.out;
+  prepare_report_folder(dir, report_fingerprint(options));
+  fs::create_directories(dir / "estimate" / ".batch");
+  std::ofstream(dir / "estimate" / ".batch" / "job.json") << "{}\n";
+  options.estimate_given = {{"--particles", "40"}};
+  CountingSteps counting;
+  try {
+    run_report(options, counting.steps());
+    FAIL() << "accepted a folder of another job";
+  } catch (const batch::UsageError& error) {
+    EXPECT_NE(std::string(error.what()).find("holds a report of a different job"),
+              std::string::npos)
+        << error.what();
+  }
+  EXPECT_EQ(counting.calls, 0);
+}
+
+}  // namespace
+}  // namespace clutterscope::report

@@ -1,0 +1,145 @@
+#include <clutterscope/batch/table_layouts.hpp>
+
+namespace clutterscope::batch {
+
+namespace {
+
+// Columns added after the first version of a table: readers accept files without them.
+TableColumn later(std::string name) { return {std::move(name), false}; }
+
+}  // namespace
+
+std::string TableLayout::header() const {
+  std::string line;
+  for (const TableColumn& column : columns) {
+    if (!line.empty()) line += ',';
+    line += column.name;
+  }
+  return line;
+}
+
+std::vector<std::string> TableLayout::required_columns() const {
+  std::vector<std::string> names;
+  for (const TableColumn& column : columns) {
+    if (column.required) names.push_back(column.name);
+  }
+  return names;
+}
+
+const TableLayout& visibility_objects_table() {
+  static const TableLayout layout{"objects.csv",
+                                  {{"split"},
+                                   {"scene_id"},
+                                   {"im_id"},
+                                   {"gt_id"},
+                                   {"obj_id"},
+                                   {"label"},
+                                   {"px_count_all"},
+                                   {"px_count_valid"},
+                                   {"px_count_visib"},
+                                   {"visib_fract"},
+                                   {"bbox_obj_x"},
+                                   {"bbox_obj_y"},
+                                   {"bbox_obj_w"},
+                                   {"bbox_obj_h"},
+                                   {"bbox_visib_x"},
+                                   {"bbox_visib_y"},
+                                   {"bbox_visib_w"},
+                                   {"bbox_visib_h"}}};
+  return layout;
+}
+
+const TableLayout& visibility_images_table() {
+  static const TableLayout layout{
+      "images.csv", {{"split"}, {"scene_id"}, {"im_id"}, {"n_objects"}, {"scene_visibility"}}};
+  return layout;
+}
+
+const TableLayout& estimates_table() {
+  static const TableLayout layout{"estimates.csv",
+                                  {{"split"},
+                                   {"scene_id"},
+                                   {"im_id"},
+                                   {"gt_id"},
+                                   {"obj_id"},
+                                   later("label"),
+                                   {"x_mm"},
+                                   {"y_mm"},
+                                   {"z_mm"},
+                                   {"var_x_cm2"},
+                                   {"var_y_cm2"},
+                                   {"var_z_cm2"},
+                                   {"confident"},
+                                   {"err_cm"},
+                                   later("init_err_cm"),
+                                   later("err_x_cm"),
+                                   later("err_y_cm"),
+                                   later("err_z_cm"),
+                                   later("nees"),
+                                   later("radius95_cm"),
+                                   later("confident_radius"),
+                                   later("ess_min"),
+                                   later("seen_through"),
+                                   later("belief_shift"),
+                                   later("consistent"),
+                                   later("time_ms")}};
+  return layout;
+}
+
+const TableLayout& bop_results_table() {
+  static const TableLayout layout{
+      "results_bop.csv", {{"scene_id"}, {"im_id"}, {"obj_id"}, {"score"}, {"R"}, {"t"}, {"time"}}};
+  return layout;
+}
+
+const TableLayout& belief_samples_table() {
+  static const TableLayout layout{
+      "beliefs", {{"gt_id"}, {"obj_id"}, {"iteration"}, {"x_mm"}, {"y_mm"}, {"z_mm"}, {"weight"}}};
+  return layout;
+}
+
+const TableLayout& report_objects_table() {
+  // The visibility columns, then the estimate's; a reader takes a file with the visibility
+  // columns only as a visibility table, and as a joined table when the required estimate
+  // columns are there too.
+  static const TableLayout layout = [] {
+    TableLayout joined = visibility_objects_table();
+    const std::vector<TableColumn> estimate = {{"x_mm"},
+                                               {"y_mm"},
+                                               {"z_mm"},
+                                               {"var_x_cm2"},
+                                               {"var_y_cm2"},
+                                               {"var_z_cm2"},
+                                               later("max_var_cm2"),
+                                               {"confident"},
+                                               {"err_cm"},
+                                               later("init_err_cm"),
+                                               later("err_x_cm"),
+                                               later("err_y_cm"),
+                                               later("err_z_cm"),
+                                               later("nees"),
+                                               later("radius95_cm"),
+                                               later("confident_radius"),
+                                               later("ess_min"),
+                                               later("time_ms"),
+                                               later("consistent")};
+    joined.columns.insert(joined.columns.end(), estimate.begin(), estimate.end());
+    return joined;
+  }();
+  return layout;
+}
+
+const TableLayout& report_images_table() {
+  static const TableLayout layout{"images.csv",
+                                  {{"split"},
+                                   {"scene_id"},
+                                   {"im_id"},
+                                   {"n_objects"},
+                                   {"scene_visibility"},
+                                   {"n_estimated"},
+                                   {"n_confident"},
+                                   {"mean_max_var_cm2"}}};
+  return layout;
+}
+
+}  // namespace clutterscope::batch

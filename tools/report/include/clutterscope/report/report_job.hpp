@@ -1,0 +1,93 @@
+#pragma once
+
+// `clutterscope report`: one folder from a dataset to a clutter report. The report runs the
+// estimate and visibility jobs with the options the user gave them into DIR/estimate and
+// DIR/visibility (their batch runners resume finished images and refuse a different job), then
+// joins and analyses their tables and writes the report files into DIR.
+//
+// The report library links no GL, so it does not call the jobs itself: the front end binds them
+// (ReportSteps, filled by the CLI from the flags with the jobs' Options structs), as COLMAP's
+// controllers receive their steps.
+//
+// The belief figures (paper Fig. 2 d-f, Fig. 3) need belief samples, which the estimate step
+// saves only with --save-beliefs: without it, the drawn images (choose_belief_images) are
+// estimated again, one by one with the samples saved, into DIR/beliefs/SPLIT_SCENE_IMID (the
+// same per-image random streams, so the same estimates; a re-run reuses them).
+//
+// DIR/.report/job.json records the dataset selection and the steps' options as given; a run
+// with a different dataset or different result-changing options is refused before any work.
+// Analysis options (--accurate-cm, --visibility-cutoff) only change the report files, which
+// are rewritten as a whole from the two tables, so they may change between runs.
+
+#include <clutterscope/batch/batch.hpp>
+#include <clutterscope/batch/dataset_selection.hpp>
+#include <clutterscope/report/report.hpp>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace clutterscope::report {
+
+// Options given on the command line for one step, by option name ("--mode") with the value as
+// typed ("" for flags). They identify the job in DIR/.report/job.json; only given options are
+// listed, so each step keeps its own defaults.
+using GivenOptions = std::map<std::string, std::string>;
+
+struct ReportJobOptions {
+  batch::DatasetOptions dataset;  // out: the report folder
+  // The variance threshold, the confidence radius and the seed are the estimate step's too, so
+  // that "confident" and the random streams mean the same in DIR/estimate and in the report.
+  ReportOptions analysis;
+  bool notebook = true;  // also write DIR/clutter_report.ipynb
+  GivenOptions visibility_given, estimate_given;
+  // The analysis options, and no --shard (a report needs every image).
+  bool IsValid(std::string* why) const;
+};
+
+// The jobs of a report, bound by the front end. Each runs (or resumes) its job into `out` and
+// throws as the job does (batch::UsageError, datasets::DatasetError, render::RenderError).
+struct ReportSteps {
+  std::function<batch::BatchResult(const std::filesystem::path& out)> visibility;
+  std::function<batch::BatchResult(const std::filesystem::path& out)> estimate;
+  // The estimate job on `image` alone, with its belief samples saved.
+  std::function<batch::BatchResult(const datasets::ImageKey& image,
+                                   const std::filesystem::path& out)>
+      beliefs;
+};
+
+// What one step did in this run.
+struct StepRun {
+  std::string command;
+  std::size_t computed = 0;
+  std::size_t resumed = 0;
+  std::size_t failed = 0;
+  double seconds = 0.0;
+};
+
+struct ReportRun {
+  std::vector<StepRun> steps;  // estimate, visibility, beliefs (the belief figures' images)
+  ReportFiles files;
+  std::string console_summary;  // format_console_summary
+  int exit_code = 0;            // 1 when images failed under --keep-going
+};
+
+// The report-level fingerprint: dataset selection and the steps' given options (numbers in
+// canonical form, so "15" and "15.0" are the same job), the estimate step's with the report's
+// threshold, seed and radius.
+nlohmann::json report_fingerprint(const ReportJobOptions& options);
+
+// Creates DIR/.report/job.json, or checks that DIR holds a report of the same job. Throws
+// batch::UsageError when it holds another job (naming the first difference) or when DIR may
+// not be the report's (batch::claim_output_folder: another command's results, a non-empty
+// folder that is not a report folder).
+void prepare_report_folder(const std::filesystem::path& dir, const nlohmann::json& fingerprint);
+
+// Runs the whole report: estimate, then visibility, then the analysis, the belief figures and
+// the files. Throws batch::UsageError for invalid options or a folder of another job, and what
+// the steps throw.
+ReportRun run_report(const ReportJobOptions& options, const ReportSteps& steps);
+
+}  // namespace clutterscope::report

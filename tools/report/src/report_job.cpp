@@ -1,0 +1,369 @@
+#include <algorithm>
+#include <chrono>
+#include <clutterscope/batch/formats.hpp>
+#include <clutterscope/batch/output_folder.hpp>
+#include <clutterscope/batch/table_layouts.hpp>
+#include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/files.hpp>
+#include <clutterscope/notebooks_export/notebook.hpp>
+#include <clutterscope/report/beliefs.hpp>
+#include <clutterscope/report/report_job.hpp>
+#include <clutterscope/report/tables.hpp>
+#include <cmath>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <set>
+#include <stdexcept>
+#include <tuple>
+#include <utility>
+
+namespace clutterscope::report {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The steps run in this order; each writes DIR/STEP.
+constexpr const char* kEstimateStep = "estimate";
+constexpr const char* kVisibilityStep = "visibility";
+
+fs::path marker_path(const fs::path& dir) { return dir / ".report" / "job.json"; }
+
+// A step's batch runner writes .batch/job.json once its options were accepted.
+bool has_step_results(const fs::path& dir) {
+  for (const char* step : {"visibility", "estimate"}) {
+    if (fs::exists(dir / step / ".batch" / "job.json")) return true;
+  }
+  return false;
+}
+
+// "15", "15.0" and "1.5e1" are one number: they select the same job.
+std::string canonical_value(const std::string& value) {
+  try {
+    std::size_t used = 0;
+    const double number = std::stod(value, &used);
+    if (used == value.size()) return batch::format_shortest(number);
+  } catch (const std::exception&) {
+    // not a number: kept as typed
+  }
+  return value;
+}
+
+// What a step's job did, as its run.json records it (seconds to the millisecond).
+struct StepResult : StepRun {
+  int exit_code = 0;
+};
+
+StepResult step_run(const std::string& command, const batch::BatchResult& result) {
+  StepResult step;
+  step.command = command;
+  step.computed = result.computed;
+  step.resumed = result.resumed;
+  step.failed = result.failed;
+  step.seconds = batch::json_rounded(result.seconds, 3).get<double>();
+  step.exit_code = result.exit_code();
+  return step;
+}
+
+// With --keep-going an image may have failed in one step only; its rows are left out of the
+// other step's table so that the join sees only images both steps finished.
+std::vector<EstimateRow> estimates_of_visible_images(std::vector<EstimateRow> estimates,
+                                                     const std::vector<ObjectRow>& objects) {
+  std::set<std::tuple<std::string, int, int>> images;
+  for (const ObjectRow& object : objects) {
+    images.emplace(object.split, object.scene_id, object.im_id);
+  }
+  estimates.erase(std::remove_if(estimates.begin(), estimates.end(),
+                                 [&images](const EstimateRow& row) {
+                                   return images.count({row.split, row.scene_id, row.im_id}) == 0;
+                                 }),
+                  estimates.end());
+  return estimates;
+}
+
+// summary.json's "run": the dataset selection, every step's options as the step recorded them
+// (its summary.json, defaults included), and the analysis options. No times: the bytes must
+// not change when a finished report is re-run.
+nlohmann::ordered_json run_record(const ReportJobOptions& options, const fs::path& dir) {
+  nlohmann::ordered_json run;
+  run["command"] = "report";
+  run["tool_version"] = CLUTTERSCOPE_VERSION;
+  run["dataset"] = batch::dataset_fingerprint(options.dataset);
+  nlohmann::ordered_json failures;
+  for (const char* step : {"visibility", "estimate"}) {
+    const nlohmann::json summary = datasets::read_json(dir / step / "summary.json");
+    run[std::string(step) + "_options"] = summary.at("options");
+    // Images that failed under --keep-going are missing from the report: list them.
+    failures[step] = summary.at("counts").at("failures");
+  }
+  run["failed_images"] = failures;
+  // The checks on the GT both steps read (rotations off orthonormal), as visibility counted.
+  run["input_checks"] = datasets::read_json(dir / "visibility" / "summary.json").at("input_checks");
+  const ReportOptions& analysis = options.analysis;
+  run["analysis"] = {{"accurate_cm", analysis.accurate_cm},
+                     {"variance_threshold_cm2", analysis.variance_threshold_cm2},
+                     {"visibility_cutoff", analysis.visibility_cutoff},
+                     {"seed", analysis.seed}};
+  if (analysis.confidence_radius_cm) {
+    run["analysis"]["confidence_radius_cm"] = *analysis.confidence_radius_cm;
+  }
+  return run;
+}
+
+void write_notebook(const fs::path& dir, const ReportOptions& analysis) {
+  notebooks_export::NotebookOptions options;
+  options.variance_threshold_cm2 = analysis.variance_threshold_cm2;
+  options.visibility_cutoff = analysis.visibility_cutoff;
+  options.accurate_cm = analysis.accurate_cm;
+  try {
+    notebooks_export::write_clutter_notebook(dir, options);
+  } catch (const notebooks_export::NotebookError& error) {
+    if (error.kind() == notebooks_export::NotebookError::Kind::kMissingReport) {
+      throw datasets::DatasetError(error.file(), error.message());
+    }
+    throw;
+  }
+}
+
+// DIR/run.json: what this run did (times differ between runs, so they are kept here).
+void write_run_json(const fs::path& dir, const std::vector<StepRun>& steps, double seconds) {
+  nlohmann::ordered_json run;
+  run["command"] = "report";
+  for (const StepRun& step : steps) {
+    run[step.command] = {{"computed", step.computed},
+                         {"resumed", step.resumed},
+                         {"failed", step.failed},
+                         {"seconds", step.seconds}};
+  }
+  run["seconds"] = seconds;
+  run["tool_version"] = CLUTTERSCOPE_VERSION;
+  datasets::write_file_atomically(dir / "run.json", run.dump(2) + "\n");
+}
+
+// ---- Belief figures ----
+
+// The largest background width embedded: enough for the figure's panels, and it keeps
+// report.html small for datasets with large images.
+constexpr int kMaxBackgroundWidth = 640;
+
+// Belief samples are saved for the drawn images only: the estimate step runs again on each
+// of them, alone, with --save-beliefs, into DIR/beliefs/SPLIT_SCENE_IMID. Per-image random
+// streams make its estimates those of DIR/estimate; its batch runner makes a re-run reuse it.
+fs::path belief_run_dir(const fs::path& dir, const ImageSummary& image) {
+  return dir / "beliefs" /
+         (image.split + "_" + datasets::six_digits(image.scene_id) + "_" +
+          datasets::six_digits(image.im_id));
+}
+
+fs::path beliefs_csv(const fs::path& estimate_dir, const ImageSummary& image) {
+  return estimate_dir / batch::belief_samples_table().file_name / image.split /
+         datasets::six_digits(image.scene_id) / (datasets::six_digits(image.im_id) + ".csv");
+}
+
+// The image under the samples: the RGB image, else the measured depth shaded (near bright),
+// else a grey frame; at most kMaxBackgroundWidth wide. `K` is mapped onto its pixel grid.
+void load_background(const datasets::SceneView& view, BeliefImage* figure) {
+  cv::Mat raster;
+  if (!view.rgb_path.empty()) {
+    raster = cv::imread(view.rgb_path.string(), cv::IMREAD_COLOR);
+    if (raster.empty()) throw datasets::DatasetError(view.rgb_path, "cannot be read as an image");
+    figure->background_kind = "RGB image";
+  } else if (!view.depth_path.empty()) {
+    const cv::Mat depth = datasets::load_depth(view);
+    double near = 0.0, far = 0.0;
+    cv::minMaxLoc(depth, nullptr, &far);
+    cv::Mat valid = depth > 0;
+    cv::minMaxLoc(depth, &near, nullptr, nullptr, nullptr, valid);
+    raster = cv::Mat(depth.size(), CV_8UC1, cv::Scalar(0));
+    const double span = far > near ? far - near : 1.0;
+    for (int v = 0; v < depth.rows; ++v) {
+      for (int u = 0; u < depth.cols; ++u) {
+        const float value = depth.at<float>(v, u);
+        if (value > 0) {
+          raster.at<std::uint8_t>(v, u) =
+              static_cast<std::uint8_t>(std::lround(230.0 - 180.0 * (value - near) / span));
+        }
+      }
+    }
+    figure->background_kind = "measured depth (shaded, near bright)";
+  } else {
+    raster = cv::Mat(view.camera.height, view.camera.width, CV_8UC1, cv::Scalar(200));
+    figure->background_kind = "image frame (the dataset has no RGB or depth image)";
+  }
+  Eigen::Matrix3d K = view.camera.K;
+  if (view.camera.width > 0 && view.camera.height > 0) {
+    K.row(0) *= static_cast<double>(raster.cols) / view.camera.width;
+    K.row(1) *= static_cast<double>(raster.rows) / view.camera.height;
+  }
+  if (raster.cols > kMaxBackgroundWidth) {
+    const double scale = static_cast<double>(kMaxBackgroundWidth) / raster.cols;
+    cv::Mat smaller;
+    cv::resize(raster, smaller,
+               cv::Size(kMaxBackgroundWidth, static_cast<int>(std::lround(raster.rows * scale))), 0,
+               0, cv::INTER_AREA);
+    K.row(0) *= static_cast<double>(smaller.cols) / raster.cols;
+    K.row(1) *= static_cast<double>(smaller.rows) / raster.rows;
+    raster = smaller;
+  }
+  figure->background = svg::BackgroundImage::from_raster(raster);
+  figure->K = K;
+}
+
+struct BeliefFigures {
+  std::vector<NamedPlot> plots;
+  StepRun step{"beliefs"};
+  int exit_code = 0;
+};
+
+// The belief figures of the chosen images. With --save-beliefs the estimate step saved every
+// image's samples already; otherwise each chosen image is estimated again (once: a re-run
+// resumes it).
+BeliefFigures belief_figures(const ReportJobOptions& options, const ReportSteps& steps,
+                             const fs::path& dir, const std::vector<ObjectRow>& objects,
+                             const ReportAnalysis& analysis) {
+  BeliefFigures figures;
+  const std::vector<ImageSummary> chosen =
+      choose_belief_images(analysis.images, options.analysis.images_with_beliefs);
+  if (chosen.empty()) return figures;
+  const bool saved_by_estimate = options.estimate_given.count("--save-beliefs") > 0;
+  const datasets::BopDataset dataset = batch::open_dataset(options.dataset);
+  for (const ImageSummary& image : chosen) {
+    fs::path samples = beliefs_csv(dir / kEstimateStep, image);
+    if (!saved_by_estimate) {
+      const fs::path out = belief_run_dir(dir, image);
+      const StepResult step =
+          step_run("beliefs", steps.beliefs({image.split, image.scene_id, image.im_id}, out));
+      figures.exit_code = std::max(figures.exit_code, step.exit_code);
+      figures.step.computed += step.computed;
+      figures.step.resumed += step.resumed;
+      figures.step.failed += step.failed;
+      figures.step.seconds += step.seconds;
+      samples = beliefs_csv(out, image);
+    }
+    if (!fs::exists(samples)) continue;  // failed under --keep-going (listed in its summary)
+    BeliefImage figure;
+    figure.image = image;
+    const datasets::SceneView view = dataset.load({image.split, image.scene_id, image.im_id});
+    load_background(view, &figure);
+    for (const ObjectRow& object : objects) {
+      if (object.split == image.split && object.scene_id == image.scene_id &&
+          object.im_id == image.im_id) {
+        figure.objects.push_back(object);
+      }
+    }
+    for (size_t gt = 0; gt < view.objects.size(); ++gt) {
+      const datasets::ModelInfo& model = dataset.model(view.objects[gt].obj_id);
+      figure.ground_truth_m[static_cast<int>(gt)] =
+          view.objects[gt].model_to_camera * (model.min + 0.5 * model.size);
+    }
+    figure.samples = read_beliefs_csv(samples);
+    figures.plots.push_back(belief_plot(figure, options.analysis.variance_threshold_cm2));
+  }
+  return figures;
+}
+
+}  // namespace
+
+bool ReportJobOptions::IsValid(std::string* why) const {
+  if (!analysis.IsValid(why)) return false;
+  if (!dataset.shard.empty()) {
+    *why =
+        "report does not take --shard: run `clutterscope visibility` and `clutterscope "
+        "estimate` shards, `clutterscope merge` them into DIR/visibility and DIR/estimate, "
+        "then run report on DIR";
+    return false;
+  }
+  return true;
+}
+
+nlohmann::json report_fingerprint(const ReportJobOptions& options) {
+  nlohmann::json fingerprint;
+  fingerprint["command"] = "report";
+  fingerprint["dataset"] = dataset_fingerprint(options.dataset);
+  const auto options_of = [](const GivenOptions& given) {
+    nlohmann::json json = nlohmann::json::object();
+    for (const auto& [name, value] : given) json[name] = canonical_value(value);
+    return json;
+  };
+  fingerprint["visibility"] = options_of(options.visibility_given);
+  nlohmann::json estimate = options_of(options.estimate_given);
+  estimate["--variance-threshold-cm2"] =
+      batch::format_shortest(options.analysis.variance_threshold_cm2);
+  estimate["--seed"] = std::to_string(options.analysis.seed);
+  // Given only: folders of reports without it keep their fingerprint.
+  if (options.analysis.confidence_radius_cm) {
+    estimate["--confidence-radius-cm"] =
+        batch::format_shortest(*options.analysis.confidence_radius_cm);
+  }
+  fingerprint["estimate"] = estimate;
+  return fingerprint;
+}
+
+void prepare_report_folder(const fs::path& dir, const nlohmann::json& fingerprint) {
+  batch::claim_output_folder(dir, "report");
+  const fs::path marker = marker_path(dir);
+  if (fs::exists(marker)) {
+    const nlohmann::json stored = datasets::read_json(marker);
+    const nlohmann::json patch = nlohmann::json::diff(stored, fingerprint);
+    if (patch.empty()) return;
+    if (!has_step_results(dir)) {
+      // An earlier run was refused before any step started: nothing to mix, take it over.
+      datasets::write_file_atomically(marker, fingerprint.dump(2) + "\n");
+      return;
+    }
+    const nlohmann::json::json_pointer pointer(patch.front().at("path").get<std::string>());
+    const auto value_at = [&pointer](const nlohmann::json& document) {
+      return document.contains(pointer) ? document.at(pointer).dump() : std::string("(not given)");
+    };
+    throw batch::UsageError(
+        dir.string() + " holds a report of a different job (" + pointer.to_string() + " is " +
+        value_at(stored) + " there, " + value_at(fingerprint) +
+        " now); its results are not mixed with this run's: choose another --out or "
+        "delete that folder");
+  }
+  datasets::write_file_atomically(marker, fingerprint.dump(2) + "\n");
+}
+
+ReportRun run_report(const ReportJobOptions& options, const ReportSteps& steps) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string why;
+  if (!options.IsValid(&why)) throw batch::UsageError(why);
+  const fs::path dir = options.dataset.out;
+  prepare_report_folder(dir, report_fingerprint(options));
+  // The steps write DIR/visibility, DIR/estimate and DIR/beliefs/..., which belong to the
+  // report: only its own steps may write there.
+  const batch::DelegatedOutput steps_write_inside(dir);
+
+  ReportRun run;
+  for (const auto& [name, job] :
+       {std::pair{kEstimateStep, &steps.estimate}, std::pair{kVisibilityStep, &steps.visibility}}) {
+    const StepResult step = step_run(name, (*job)(dir / name));
+    run.exit_code = std::max(run.exit_code, step.exit_code);
+    run.steps.push_back(step);
+  }
+
+  const fs::path visibility_dir = dir / kVisibilityStep;
+  const fs::path estimates_csv = dir / kEstimateStep / batch::estimates_table().file_name;
+  std::vector<ObjectRow> objects =
+      read_objects_csv(visibility_dir / batch::visibility_objects_table().file_name);
+  join_estimates(objects, estimates_of_visible_images(read_estimates_csv(estimates_csv), objects),
+                 estimates_csv);
+  const ReportAnalysis analysis = analyse_report(
+      objects, read_images_csv(visibility_dir / batch::visibility_images_table().file_name),
+      options.analysis);
+  std::vector<NamedPlot> plots = standard_plots(objects, analysis);
+  BeliefFigures beliefs = belief_figures(options, steps, dir, objects, analysis);
+  run.exit_code = std::max(run.exit_code, beliefs.exit_code);
+  run.steps.push_back(beliefs.step);
+  plots.insert(plots.end(), beliefs.plots.begin(), beliefs.plots.end());
+  run.files = write_report(dir, objects, analysis, plots, run_record(options, dir));
+  if (options.notebook) write_notebook(dir, options.analysis);
+  run.console_summary = format_console_summary(analysis);
+  write_run_json(dir, run.steps,
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  return run;
+}
+
+}  // namespace clutterscope::report
