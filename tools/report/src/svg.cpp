@@ -1,5 +1,7 @@
 #include <algorithm>
+#include <clutterscope/batch/formats.hpp>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/random_streams.hpp>
 #include <clutterscope/report/svg.hpp>
 #include <cmath>
 #include <cstdio>
@@ -183,13 +185,6 @@ std::string ground_truth_marker(double cx, double cy, Colour colour) {
   return out.str();
 }
 
-// FNV-1a, for ids that differ between figures of one HTML page.
-std::uint64_t fnv1a(const std::string& bytes) {
-  std::uint64_t hash = 0xcbf29ce484222325ULL;
-  for (unsigned char c : bytes) hash = (hash ^ c) * 0x100000001b3ULL;
-  return hash;
-}
-
 // The legend of image panels: each object label once (first colour seen) and which markers
 // occur.
 struct PanelLegend {
@@ -266,9 +261,9 @@ std::string image_panels(const std::string& title, const BackgroundImage& backgr
   const int width = kGap + count * (panel_width + kGap);
   const int images_top = kMarginTop + kPanelTitle;
   const int height = images_top + panel_height + kGap + legend_rows * kLegendRow + kGap;
-  char id[32];
-  std::snprintf(id, sizeof(id), "bg-%016llx",
-                static_cast<unsigned long long>(fnv1a(title + background.png_bytes)));
+  // Distinct for the figures of one HTML page.
+  const std::string id =
+      "bg-" + batch::format_hex64(datasets::fnv1a64(title + background.png_bytes));
 
   std::ostringstream out;
   out << svg_open(width, height, title);
