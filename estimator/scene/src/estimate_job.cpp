@@ -117,10 +117,10 @@ class EstimateWorker {
     std::string rotation, translation;
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c)
-        rotation += (rotation.empty() ? "" : " ") + batch::format_general(object.rotation(r, c), 9);
+        rotation += (rotation.empty() ? "" : " ") + batch::printf_general(object.rotation(r, c), 9);
     for (int a = 0; a < 3; ++a)
       translation += (translation.empty() ? "" : " ") +
-                     batch::format_general(1e3 * object.model_translation[a], 9);
+                     batch::printf_general(1e3 * object.model_translation[a], 9);
     bop.add(rotation).add(translation);
     if (job_.no_time) {
       bop.add("-1");
