@@ -89,8 +89,9 @@ class VisibilityWorker {
     std::filesystem::path depth_path;
     if (options_.is_bop()) {
       // Name the file BOP expects when the image has none, so the error says where to look.
-      char expected[32];
-      std::snprintf(expected, sizeof expected, "%06d/depth/%06d.png", key.scene_id, key.im_id);
+      const std::filesystem::path expected =
+          std::filesystem::path(datasets::six_digits(key.scene_id)) / "depth" /
+          (datasets::six_digits(key.im_id) + ".png");
       depth_path =
           view.depth_path.empty() ? dataset_.root() / key.split / expected : view.depth_path;
       measured_mm = load_bop_depth_mm(depth_path.string(), depth_scale, view.camera.width,

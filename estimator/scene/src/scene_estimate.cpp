@@ -235,8 +235,7 @@ ObservedView observe(SceneEstimator::State& s, const datasets::SceneView& view,
   datasets::SceneView scaled = view;
   if (measured) {
     if (view.depth_path.empty()) {
-      char expected[32];
-      std::snprintf(expected, sizeof expected, "depth/%06d.png", view.key.im_id);
+      const std::string expected = "depth/" + datasets::six_digits(view.key.im_id) + ".png";
       throw datasets::DatasetError(
           s.dataset.root() / view.key.split / datasets::six_digits(view.key.scene_id),
           where + "no depth image (" + expected +

@@ -51,8 +51,7 @@ void run_graph(const GraphArguments& arguments) {
       graphs[key.im_id] = datasets::infer_scene_graph(view, dataset.models(), options);
     }
     const std::string json = datasets::scene_graphs_json(graphs);
-    char folder[16];
-    std::snprintf(folder, sizeof(folder), "%06d", scene_id);
+    const std::string folder = datasets::six_digits(scene_id);
     if (arguments.write) {
       datasets::write_file_atomically(
           std::filesystem::path(arguments.dataset) / arguments.split / folder / "scene_graph.json",
