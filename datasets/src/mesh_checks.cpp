@@ -156,6 +156,20 @@ void check_stl(const std::filesystem::path& path, std::string_view bytes) {
     } else if (tokens[0] == "solid" || tokens[0] == "endsolid") {
       if (vertices_in_facet >= 0)
         throw DatasetError(path, where + std::string(tokens[0]) + " inside a facet");
+      // assimp takes the one token after "solid" as the name and reads the rest of the line
+      // as the body, skipping unknown bytes one at a time: a keyword there starts a facet this
+      // grammar never checked (a fuzzed "solid box\016 facet normal 0 lid box" leaked).
+      if (tokens[0] == "solid") {
+        for (std::size_t k = 2; k < tokens.size(); ++k) {
+          for (const char* keyword : {"facet", "outer", "vertex", "endloop", "endsolid"}) {
+            if (tokens[k].find(keyword) != std::string_view::npos) {
+              throw DatasetError(path, where + "the solid's name is one word; '" +
+                                           std::string(tokens[k]) + "' after it holds '" + keyword +
+                                           "'");
+            }
+          }
+        }
+      }
     } else if (tokens[0] == "vertex") {
       if (tokens.size() != 4) throw DatasetError(path, where + "vertex needs 3 coordinates");
       for (std::size_t k = 1; k < 4; ++k) {

@@ -151,6 +151,10 @@ TEST_F(MeshFiles, MalformedObjAndStlAreRefusedBeforeAssimp) {
             std::string::npos);
   EXPECT_NE(message_of("i.stl", "solid t\nouter loop\n").find("line 2: outer outside a facet"),
             std::string::npos);
+  // Found by fuzzing: assimp reads one word of name after "solid" and a facet after it.
+  EXPECT_NE(message_of("j.stl", std::string("solid box\016 facet normal 0 lid box\n"))
+                .find("line 1: the solid's name is one word; 'facet' after it holds 'facet'"),
+            std::string::npos);
 }
 
 std::string base64(const std::string& bytes) {
