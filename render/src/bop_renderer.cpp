@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <array>
 #include <clutterscope/render/bop_renderer.hpp>
+#include <clutterscope/render/covering_triangles.hpp>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -89,6 +90,7 @@ std::array<float, 16> mvp_uniform(const Matrix4& view, const Matrix4& proj) {
 // BopModel
 
 struct BopModel::State {
+  std::shared_ptr<const datasets::Mesh> mesh;  // CPU copy for the coverage test
   gl::MeshBuffers buffers;
   GLsizei index_count = 0;
   Eigen::Vector3d bbox_min = Eigen::Vector3d::Zero();
@@ -103,6 +105,12 @@ const Eigen::Vector3d& BopModel::bbox_min() const { return state_->bbox_min; }
 const Eigen::Vector3d& BopModel::bbox_size() const { return state_->bbox_size; }
 
 BopModel BopModel::upload(const datasets::Mesh& mesh) {
+  return upload(std::make_shared<const datasets::Mesh>(mesh));
+}
+
+BopModel BopModel::upload(std::shared_ptr<const datasets::Mesh> shared_mesh) {
+  if (!shared_mesh) throw std::invalid_argument("BopModel::upload: no mesh");
+  const datasets::Mesh& mesh = *shared_mesh;
   gl::check_uploadable(mesh, "BopModel::upload");
   BopModel model;
   State& state = *model.state_;
@@ -117,6 +125,7 @@ BopModel BopModel::upload(const datasets::Mesh& mesh) {
   state.bbox_size = hi - lo;
   state.index_count = static_cast<GLsizei>(mesh.triangles.size() * 3);
   state.buffers = gl::upload_mesh_buffers(mesh);
+  state.mesh = std::move(shared_mesh);
   gl::check_error("BopModel::upload");
   return model;
 }
@@ -143,6 +152,13 @@ struct BopDepthRenderer::State {
   gl::Framebuffer framebuffer;
   gl::Renderbuffer depth_buffer;
   int width = 0, height = 0;
+  BopRendererOptions options;
+  gl::Buffer covering_indices;  // the triangles of one draw that may cover a pixel centre
+  CoveringTriangles covering;
+  TriangleCounts counts;
+
+  void draw(const BopModel::State& model, const std::array<float, 16>& mvp, const BopTarget& target,
+            const cv::Rect& scissor);
 
   void ensure_target(int target_width, int target_height) {
     if (target_width == width && target_height == height) return;
@@ -170,8 +186,45 @@ struct BopDepthRenderer::State {
   }
 };
 
-BopDepthRenderer::BopDepthRenderer(const EglContext& context) : state_(std::make_unique<State>()) {
+// The model's triangles with u_mvp, into the scissor box `scissor` (GL window coordinates):
+// all of them, or only those that may cover one of its pixel centres.
+void BopDepthRenderer::State::draw(const BopModel::State& model, const std::array<float, 16>& mvp,
+                                   const BopTarget& target, const cv::Rect& scissor) {
+  State& state = *this;
+  const datasets::Mesh& mesh = *model.mesh;
+  state.counts.submitted += mesh.triangles.size();
+  glBindVertexArray(model.buffers.vertex_array.get());
+  if (!state.options.skip_uncovered_triangles) {
+    state.counts.drawn += mesh.triangles.size();
+    glDrawElements(GL_TRIANGLES, model.index_count, GL_UNSIGNED_INT, nullptr);
+    glBindVertexArray(0);
+    return;
+  }
+  const Eigen::Matrix4d clip_from_model =
+      Eigen::Map<const Eigen::Matrix4f>(mvp.data()).cast<double>();
+  const CoverageWindow window{0,         0,         target.width,  target.height,
+                              scissor.x, scissor.y, scissor.width, scissor.height};
+  find_covering_triangles(mesh.positions, mesh.triangles, clip_from_model, window,
+                          FaceSelection::kAll, &state.covering);
+  state.counts.drawn += state.covering.kept;
+  if (state.covering.kept > 0) {
+    // The element binding is the vertex array's: borrow it for this draw, then give it back.
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, state.covering_indices.get());
+    glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+                 static_cast<GLsizeiptr>(state.covering.indices.size() * sizeof(std::uint32_t)),
+                 state.covering.indices.data(), GL_STREAM_DRAW);
+    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(state.covering.indices.size()),
+                   GL_UNSIGNED_INT, nullptr);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, model.buffers.indices.get());
+  }
+  glBindVertexArray(0);
+}
+
+BopDepthRenderer::BopDepthRenderer(const EglContext& context, const BopRendererOptions& options)
+    : state_(std::make_unique<State>()) {
   context.make_current();
+  state_->options = options;
+  state_->covering_indices = gl::make_buffer();
   GLint major = 0, minor = 0;
   glGetIntegerv(GL_MAJOR_VERSION, &major);
   glGetIntegerv(GL_MINOR_VERSION, &minor);
@@ -192,6 +245,7 @@ BopDepthRenderer::BopDepthRenderer(const EglContext& context) : state_(std::make
 BopDepthRenderer::BopDepthRenderer(BopDepthRenderer&&) noexcept = default;
 
 int BopDepthRenderer::max_target_size() const { return state_->max_size; }
+const TriangleCounts& BopDepthRenderer::triangle_counts() const { return state_->counts; }
 BopDepthRenderer& BopDepthRenderer::operator=(BopDepthRenderer&&) noexcept = default;
 BopDepthRenderer::~BopDepthRenderer() = default;
 
@@ -251,9 +305,7 @@ cv::Mat BopDepthRenderer::render_object(const BopModel& model, const Eigen::Matr
   glClearBufferfv(GL_DEPTH, 0, &far_depth);
   glUseProgram(state.program.get());
   glUniformMatrix4fv(state.mvp, 1, GL_FALSE, mvp.data());
-  glBindVertexArray(model.state_->buffers.vertex_array.get());
-  glDrawElements(GL_TRIANGLES, model.state_->index_count, GL_UNSIGNED_INT, nullptr);
-  glBindVertexArray(0);
+  state.draw(*model.state_, mvp, target, cv::Rect(rect.x, gl_y, rect.width, rect.height));
 
   cv::Mat window_depth(rect.height, rect.width, CV_32F);
   glReadPixels(rect.x, gl_y, rect.width, rect.height, GL_DEPTH_COMPONENT, GL_FLOAT,

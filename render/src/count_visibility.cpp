@@ -139,13 +139,15 @@ cv::Mat Renderer::State::draw_coverage(const Intrinsics& target,
     // A closed mesh's silhouette and front surface are its front faces: skipping the back
     // faces halves the fragments this pass shades (it has no early depth test).
     const int orientation = instances[i].mesh->state_->closed_orientation;
+    FaceSelection front = FaceSelection::kAll;
     if (orientation != 0) {
       glEnable(GL_CULL_FACE);
       glFrontFace(orientation > 0 ? GL_CW : GL_CCW);  // the y-down projection flips winding
+      front = orientation > 0 ? FaceSelection::kClockwise : FaceSelection::kCounterClockwise;
     } else {
       glDisable(GL_CULL_FACE);
     }
-    draw(program, instances[i], static_cast<std::uint32_t>(i + 1), &bound);
+    draw(program, instances[i], static_cast<std::uint32_t>(i + 1), &bound, front);
   }
   glDisable(GL_CULL_FACE);
   glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);

@@ -72,6 +72,7 @@ GpuMesh GpuMesh::upload(const datasets::Mesh& mesh) {
   state.buffers = gl::upload_mesh_buffers(mesh);
 
   state.closed_orientation = closed_orientation(mesh);
+  state.positions.assign(mesh.positions.begin(), mesh.positions.end());
   state.triangles.assign(mesh.triangles.begin(), mesh.triangles.end());
   std::vector<Eigen::Vector4f> planes;
   compute_triangle_planes(mesh, &state.triangle_planes, &planes);

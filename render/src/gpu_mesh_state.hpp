@@ -20,6 +20,8 @@ struct GpuMesh::State {
   std::size_t triangle_count = 0;
   Eigen::AlignedBox3f bounds;
   // CPU copies for back-face culling of whole runs of tiles (TileOptions::cull_back_faces).
+  // Also for leaving out triangles that cover no pixel centre (covering_triangles.hpp).
+  std::vector<Eigen::Vector3f> positions;
   std::vector<std::array<std::uint32_t, 3>> triangles;
   std::vector<Eigen::Vector4d> triangle_planes;  // model-frame unit normal and offset
   // +1: closed and wound outward (counter-clockwise seen from outside), -1: closed and wound

@@ -50,6 +50,8 @@ void Renderer::State::ensure_target(int width, int height) {
 
 void Renderer::State::begin(int width, int height) {
   ensure_target(width, height);
+  target_width = width;
+  target_height = height;
   glBindFramebuffer(GL_FRAMEBUFFER, framebuffer.get());
   glEnable(GL_SCISSOR_TEST);
   glScissor(0, 0, width, height);
@@ -68,9 +70,10 @@ void Renderer::State::begin(int width, int height) {
 }
 
 void Renderer::State::set_projection(const detail::Program& program, const Intrinsics& k,
-                                     cv::Point origin) const {
-  const detail::Matrix4fColumnMajor projection = detail::projection_matrix(k, zero_to_one_clip);
-  glUniformMatrix4fv(program.projection, 1, GL_FALSE, projection.data());
+                                     cv::Point origin) {
+  const detail::Matrix4fColumnMajor matrix = detail::projection_matrix(k, zero_to_one_clip);
+  glUniformMatrix4fv(program.projection, 1, GL_FALSE, matrix.data());
+  projection = matrix.cast<double>();
   const double shift = detail::pixel_shift(k.pixel_center);
   glUniform4f(program.ray, static_cast<float>(k.cx + shift), static_cast<float>(k.cy + shift),
               static_cast<float>(k.fx), static_cast<float>(k.fy));
@@ -81,12 +84,33 @@ void Renderer::State::set_projection(const detail::Program& program, const Intri
 }
 
 void Renderer::State::draw(const detail::Program& program, const Instance& instance,
-                           std::uint32_t label, const GpuMesh::State** bound_mesh) const {
+                           std::uint32_t label, const GpuMesh::State** bound_mesh,
+                           FaceSelection faces) {
   const detail::Matrix4fColumnMajor model_view = instance.model_to_camera.matrix().cast<float>();
   glUniformMatrix4fv(program.model_view, 1, GL_FALSE, model_view.data());
   glUniform1ui(program.label, label);
   const GpuMesh::State& mesh = bind(*instance.mesh, bound_mesh);
-  glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT, nullptr);
+  counts.submitted += mesh.triangle_count;
+  if (!skip_uncovered) {
+    counts.drawn += mesh.triangle_count;
+    glDrawElements(GL_TRIANGLES, mesh.index_count, GL_UNSIGNED_INT, nullptr);
+    return;
+  }
+  // The vertex shader's projection * (model_view * p), here in double from the same floats.
+  const Eigen::Matrix4d clip_from_model = projection * model_view.cast<double>();
+  const CoverageWindow window{0, 0, target_width, target_height, 0, 0, target_width, target_height};
+  find_covering_triangles(mesh.positions, mesh.triangles, clip_from_model, window, faces,
+                          &covering);
+  counts.drawn += covering.kept;
+  if (covering.kept == 0) return;
+  // The element binding is the vertex array's: borrow it for this draw, then give it back.
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, covering_indices.get());
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(covering.indices.size() * sizeof(std::uint32_t)),
+               covering.indices.data(), GL_STREAM_DRAW);
+  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(covering.indices.size()), GL_UNSIGNED_INT,
+                 nullptr);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, mesh.buffers.indices.get());
 }
 
 const GpuMesh::State& Renderer::State::bind(const GpuMesh& gpu_mesh,
@@ -160,6 +184,8 @@ Renderer::Renderer(const EglContext& context, const RendererOptions& options)
   if (state_->zero_to_one_clip) glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
   glPixelStorei(GL_PACK_ALIGNMENT, 1);
   state_->exact_depth = options.depth == DepthMode::kExactPerTile;
+  state_->skip_uncovered = options.skip_uncovered_triangles && !state_->exact_depth;
+  state_->covering_indices = gl::make_buffer();
   state_->depth_label = detail::depth_label_program(state_->exact_depth);
   const bool viewport_array =
       (version >= 41 || detail::has_gl_extension("GL_ARB_viewport_array")) &&
@@ -192,6 +218,7 @@ Renderer& Renderer::operator=(Renderer&&) noexcept = default;
 Renderer::~Renderer() = default;
 
 int Renderer::max_target_size() const { return state_->max_size; }
+const TriangleCounts& Renderer::triangle_counts() const { return state_->counts; }
 
 DepthLabelImage Renderer::render(const Intrinsics& intrinsics,
                                  const std::vector<Instance>& instances) {

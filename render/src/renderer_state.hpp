@@ -4,6 +4,7 @@
 // render_tiles.cpp: tiles, count_visibility.cpp: coverage counts).
 
 #include <Eigen/Core>
+#include <clutterscope/render/covering_triangles.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <cstdint>
 #include <vector>
@@ -36,6 +37,15 @@ struct Renderer::State {
   gl::Renderbuffer depth_colour, label_colour, depth_buffer;
   int capacity_width = 0, capacity_height = 0;
 
+  // Leaving out triangles that cover no pixel centre (RendererOptions::skip_uncovered_triangles)
+  // in render() and count_visibility(): the current target and projection, the kept triangles.
+  bool skip_uncovered = false;
+  int target_width = 0, target_height = 0;
+  Eigen::Matrix4d projection = Eigen::Matrix4d::Identity();
+  gl::Buffer covering_indices;
+  CoveringTriangles covering;
+  TriangleCounts counts;
+
   gl::Texture coverage_image;  // r32ui 2D array, one bit per instance
   int coverage_width = 0, coverage_height = 0, coverage_layers = 0;
 
@@ -44,10 +54,11 @@ struct Renderer::State {
   // Binds the target and clears [0, width) x [0, height) to background.
   void begin(int width, int height);
   // Sets the target's projection; `origin` is the window position of its pixel (0, 0).
-  void set_projection(const detail::Program& program, const Intrinsics& k, cv::Point origin) const;
-  // Draws one instance with `program` bound; `bound_mesh` avoids rebinding the same VAO.
+  void set_projection(const detail::Program& program, const Intrinsics& k, cv::Point origin);
+  // Draws one instance with `program` bound into the target of begin(); `bound_mesh` avoids
+  // rebinding the same VAO. `faces`: the orientation GL keeps where it culls back faces.
   void draw(const detail::Program& program, const Instance& instance, std::uint32_t label,
-            const GpuMesh::State** bound_mesh) const;
+            const GpuMesh::State** bound_mesh, FaceSelection faces = FaceSelection::kAll);
   // Binds the mesh's vertices and triangle planes unless `bound_mesh` is already it.
   const GpuMesh::State& bind(const GpuMesh& gpu_mesh, const GpuMesh::State** bound_mesh) const;
   cv::Mat read_labels(int x, int y, int width, int height) const;

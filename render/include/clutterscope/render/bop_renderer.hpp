@@ -12,11 +12,14 @@
 //  - depth read from a 16-bit depth buffer (vispy's GL_DEPTH_COMPONENT16) and linearised in
 //    float32 as bop_toolkit does: mult / (z + addi), background (z == 1) = 0.
 // Pixels are only rasterised inside the window asked for (scissor), which does not change
-// which pixels a triangle covers or their depth: both depend on window coordinates only.
+// which pixels a triangle covers or their depth: both depend on window coordinates only. And
+// by default only the triangles that can cover a pixel centre of that window are drawn (see
+// BopRendererOptions), which changes no pixel either.
 
 #include <Eigen/Core>
 #include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/render/context.hpp>
+#include <clutterscope/render/triangle_counts.hpp>
 #include <memory>
 #include <opencv2/core.hpp>
 
@@ -26,7 +29,10 @@ namespace clutterscope::render {
 // scale_to_metres = 1 for BOP's millimetres). Move-only; needs a current context.
 class BopModel {
  public:
-  static BopModel upload(const datasets::Mesh& mesh);
+  // Uploads the vertices and triangles to the current context and keeps the CPU mesh, shared
+  // (one copy for the contexts of all workers), for the renderer's coverage test.
+  static BopModel upload(std::shared_ptr<const datasets::Mesh> mesh);
+  static BopModel upload(const datasets::Mesh& mesh);  // keeps a copy
   BopModel(BopModel&&) noexcept;
   BopModel& operator=(BopModel&&) noexcept;
   BopModel(const BopModel&) = delete;
@@ -51,10 +57,18 @@ struct BopTarget {
   void validate() const;  // throws std::invalid_argument
 };
 
+struct BopRendererOptions {
+  // Draw only the triangles that can cover a pixel centre of the window (tested on the CPU,
+  // with a margin far above sub-pixel snapping and float rounding): the same pixels and depth,
+  // and on a software rasteriser much less work for dense models, whose triangles are often
+  // smaller than a pixel. Off: every triangle is drawn, as bop_toolkit does.
+  bool skip_uncovered_triangles = true;
+};
+
 class BopDepthRenderer {
  public:
   // The context must be current on this thread for the renderer's whole life.
-  explicit BopDepthRenderer(const EglContext& context);
+  explicit BopDepthRenderer(const EglContext& context, const BopRendererOptions& options = {});
   BopDepthRenderer(BopDepthRenderer&&) noexcept;
   BopDepthRenderer& operator=(BopDepthRenderer&&) noexcept;
   BopDepthRenderer(const BopDepthRenderer&) = delete;
@@ -78,6 +92,9 @@ class BopDepthRenderer {
   // GL_MAX_VIEWPORT_DIMS, GL_MAX_TEXTURE_SIZE, the smallest); a larger target throws
   // RenderError.
   int max_target_size() const;
+
+  // Triangles of the models drawn so far, and of them those handed to GL.
+  const TriangleCounts& triangle_counts() const;
 
  private:
   struct State;
