@@ -46,7 +46,8 @@
 #     2 s before the run (input_digest.cpp, kRacyNs), so its bytes depend on when the samples
 #     were copied.
 #   - normalised: every run.json (batch commands' and report's): the values of "seconds",
-#     "seconds_per_image" and "images_per_second", at any depth, become null (wall times); the
+#     "seconds_per_image" and "images_per_second", at any depth, become null (wall times), and
+#     "peak_memory_mib" (the process's, added after the baseline was recorded) is left out; the
 #     rest (computed/resumed/failed counts, jobs, version) is compared.
 #   - normalised: in every file without a NUL byte (text: JSON, CSV, TSV, HTML, SVG, ipynb,
 #     stdout), the scratch folder's absolute path becomes @SCRATCH@: the dataset (and
@@ -153,10 +154,12 @@ import hashlib, json, os, sys
 scratch = sys.argv[1]
 roots = sorted({scratch, os.path.realpath(scratch)}, key=len, reverse=True)
 TIMES = {"seconds", "seconds_per_image", "images_per_second"}
+MACHINE = {"peak_memory_mib"}  # of this run's process, and newer than the baseline
 
 def drop_times(value):
     if isinstance(value, dict):
-        return {k: None if k in TIMES else drop_times(v) for k, v in value.items()}
+        return {k: None if k in TIMES else drop_times(v)
+                for k, v in value.items() if k not in MACHINE}
     if isinstance(value, list):
         return [drop_times(v) for v in value]
     return value

@@ -138,7 +138,7 @@ cv::Mat Renderer::State::draw_coverage(const Intrinsics& target,
     glUniform1ui(program.coverage_bit, 1u << (i % 32));
     // A closed mesh's silhouette and front surface are its front faces: skipping the back
     // faces halves the fragments this pass shades (it has no early depth test).
-    const int orientation = instances[i].mesh->state_->closed_orientation;
+    const int orientation = instances[i].mesh->state_->prepared->closed_orientation;
     FaceSelection front = FaceSelection::kAll;
     if (orientation != 0) {
       glEnable(GL_CULL_FACE);

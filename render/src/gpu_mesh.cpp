@@ -1,5 +1,6 @@
 #include <array>
 #include <clutterscope/render/renderer.hpp>
+#include <stdexcept>
 #include <unordered_map>
 
 #include "gpu_mesh_state.hpp"
@@ -11,11 +12,11 @@ GpuMesh::GpuMesh(GpuMesh&&) noexcept = default;
 GpuMesh& GpuMesh::operator=(GpuMesh&&) noexcept = default;
 GpuMesh::~GpuMesh() = default;
 std::size_t GpuMesh::triangle_count() const { return state_ ? state_->triangle_count : 0; }
-const Eigen::AlignedBox3f& GpuMesh::bounds() const { return state_->bounds; }
+const Eigen::AlignedBox3f& GpuMesh::bounds() const { return state_->prepared->bounds; }
 
 namespace {
 
-// See GpuMesh::State::closed_orientation. Vertices are welded by exact position (weld_vertices),
+// See PreparedMesh::closed_orientation. Vertices are welded by exact position (weld_vertices),
 // since meshes often duplicate vertices along seams of normals or texture coordinates; a mesh is
 // closed when every edge is used exactly once in each direction.
 int closed_orientation(const datasets::Mesh& mesh) {
@@ -62,20 +63,31 @@ void compute_triangle_planes(const datasets::Mesh& mesh,
 
 }  // namespace
 
+std::shared_ptr<const PreparedMesh> prepare_mesh(std::shared_ptr<const datasets::Mesh> mesh) {
+  if (!mesh) throw std::invalid_argument("prepare_mesh: no mesh");
+  auto prepared = std::make_shared<PreparedMesh>();
+  prepared->closed_orientation = closed_orientation(*mesh);
+  compute_triangle_planes(*mesh, &prepared->planes, &prepared->planes_float);
+  prepared->bounds = mesh->bounds();
+  prepared->mesh = std::move(mesh);
+  return prepared;
+}
+
 GpuMesh GpuMesh::upload(const datasets::Mesh& mesh) {
+  gl::check_uploadable(mesh, "GpuMesh::upload");
+  return upload(prepare_mesh(std::make_shared<const datasets::Mesh>(mesh)));
+}
+
+GpuMesh GpuMesh::upload(std::shared_ptr<const PreparedMesh> prepared) {
+  if (!prepared || !prepared->mesh) throw std::invalid_argument("GpuMesh::upload: no mesh");
+  const datasets::Mesh& mesh = *prepared->mesh;
   gl::check_uploadable(mesh, "GpuMesh::upload");
   GpuMesh gpu;
   State& state = *gpu.state_;
-  state.bounds = mesh.bounds();
   state.triangle_count = mesh.triangles.size();
   state.index_count = static_cast<GLsizei>(mesh.triangles.size() * 3);
   state.buffers = gl::upload_mesh_buffers(mesh);
-
-  state.closed_orientation = closed_orientation(mesh);
-  state.positions.assign(mesh.positions.begin(), mesh.positions.end());
-  state.triangles.assign(mesh.triangles.begin(), mesh.triangles.end());
-  std::vector<Eigen::Vector4f> planes;
-  compute_triangle_planes(mesh, &state.triangle_planes, &planes);
+  state.prepared = std::move(prepared);
 
   // Triangle planes for DepthMode::kExactPerTile, where the driver's texture buffers hold them.
   GLint max_texels = 0;
@@ -84,6 +96,7 @@ GpuMesh GpuMesh::upload(const datasets::Mesh& mesh) {
     gl::check_error("GpuMesh::upload");
     return gpu;
   }
+  const std::vector<Eigen::Vector4f>& planes = state.prepared->planes_float;
   state.planes = gl::make_buffer();
   glBindBuffer(GL_TEXTURE_BUFFER, state.planes.get());
   glBufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(planes.size() * sizeof(planes[0])),

@@ -141,12 +141,12 @@ void Renderer::State::keep_front_faces(const std::vector<TileRequest>& requests,
     cameras.emplace_back(centre.x(), centre.y(), centre.z(), 1e-3 * centre.norm());
   }
   run->first_index = kept_indices.size();
-  for (std::size_t t = 0; t < geometry.triangles.size(); ++t) {
-    const Eigen::Vector4d& plane = geometry.triangle_planes[t];
+  const std::vector<std::array<std::uint32_t, 3>>& triangles = geometry.mesh().triangles;
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const Eigen::Vector4d& plane = geometry.prepared->planes[t];
     for (const Eigen::Vector4d& camera : cameras) {
       if (plane.head<3>().dot(camera.head<3>()) - plane.w() > -camera.w()) {
-        kept_indices.insert(kept_indices.end(), geometry.triangles[t].begin(),
-                            geometry.triangles[t].end());
+        kept_indices.insert(kept_indices.end(), triangles[t].begin(), triangles[t].end());
         break;
       }
     }

@@ -99,8 +99,8 @@ void Renderer::State::draw(const detail::Program& program, const Instance& insta
   // The vertex shader's projection * (model_view * p), here in double from the same floats.
   const Eigen::Matrix4d clip_from_model = projection * model_view.cast<double>();
   const CoverageWindow window{0, 0, target_width, target_height, 0, 0, target_width, target_height};
-  find_covering_triangles(mesh.positions, mesh.triangles, clip_from_model, window, faces,
-                          &covering);
+  find_covering_triangles(mesh.mesh().positions, mesh.mesh().triangles, clip_from_model, window,
+                          faces, &covering);
   counts.drawn += covering.kept;
   if (covering.kept == 0) return;
   // The element binding is the vertex array's: borrow it for this draw, then give it back.

@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <string>
@@ -67,11 +68,67 @@ bool is_target(const datasets::SceneView& view, int gt) {
   return !view.target_gt || std::binary_search(view.target_gt->begin(), view.target_gt->end(), gt);
 }
 
-// One worker thread: its own EGL context, renderer and uploaded meshes.
+// The models of a run, each read from its file once and shared by the workers, which upload
+// them to their own contexts. Thread-safe. A model that fails to load is not kept: each image
+// that needs it reports the error.
+class SharedModels {
+ public:
+  explicit SharedModels(const datasets::BopDataset& dataset) : dataset_(dataset) {}
+
+  // obj_id's mesh in metres, prepared for render::GpuMesh::upload.
+  std::shared_ptr<const render::PreparedMesh> prepared(int obj_id, const std::string& where) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    const auto found = prepared_.find(obj_id);
+    if (found != prepared_.end()) return found->second;
+    auto prepared =
+        render::prepare_mesh(load(obj_id, datasets::MeshLoadOptions{}.scale_to_metres, where));
+    prepared_.emplace(obj_id, prepared);
+    return prepared;
+  }
+
+  // obj_id's mesh in its file's units, as the BOP modes render it.
+  std::shared_ptr<const datasets::Mesh> file_units(int obj_id, const std::string& where) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    return load(obj_id, 1.0, where);
+  }
+
+ private:
+  // obj_id's mesh with coordinates times scale_to_metres, loaded on first use under the lock
+  // (one load at a time: never one twice). Throws DatasetError naming the file and `where`.
+  std::shared_ptr<const datasets::Mesh> load(int obj_id, double scale_to_metres,
+                                             const std::string& where) {
+    const auto key = std::make_pair(obj_id, scale_to_metres);
+    const auto found = meshes_.find(key);
+    if (found != meshes_.end()) return found->second;
+    const datasets::ModelInfo& model = dataset_.model(obj_id);
+    try {
+      auto mesh = std::make_shared<const datasets::Mesh>(
+          datasets::load_mesh(model.mesh_path, {scale_to_metres}));
+      meshes_.emplace(key, mesh);
+      return mesh;
+    } catch (const datasets::DatasetError& error) {
+      std::string what = error.what();  // named once: drop the file before the reason
+      const std::string prefix = error.file().string() + ": ";
+      if (!error.file().empty() && what.rfind(prefix, 0) == 0) what = what.substr(prefix.size());
+      throw datasets::DatasetError(
+          model.mesh_path,
+          where + "model of obj_id " + std::to_string(obj_id) + " cannot be used: " + what);
+    }
+  }
+
+  const datasets::BopDataset& dataset_;
+  std::mutex mutex_;
+  std::map<std::pair<int, double>, std::shared_ptr<const datasets::Mesh>> meshes_;
+  std::map<int, std::shared_ptr<const render::PreparedMesh>> prepared_;
+};
+
+// One worker thread: its own EGL context, renderer and uploads of the shared models.
 class VisibilityWorker {
  public:
-  VisibilityWorker(const datasets::BopDataset& dataset, const VisibilityJobOptions& job)
+  VisibilityWorker(const datasets::BopDataset& dataset, const VisibilityJobOptions& job,
+                   SharedModels& models)
       : dataset_(dataset),
+        models_(models),
         job_(job),
         options_(job.visibility),
         context_(render::EglContext::create()),
@@ -175,25 +232,11 @@ class VisibilityWorker {
   }
 
  private:
-  datasets::Mesh load_model(int obj_id, const std::string& where, double scale_to_metres) const {
-    const datasets::ModelInfo& model = dataset_.model(obj_id);
-    try {
-      return datasets::load_mesh(model.mesh_path, {scale_to_metres});
-    } catch (const datasets::DatasetError& error) {
-      std::string what = error.what();  // named once: drop the file before the reason
-      const std::string prefix = error.file().string() + ": ";
-      if (!error.file().empty() && what.rfind(prefix, 0) == 0) what = what.substr(prefix.size());
-      throw datasets::DatasetError(
-          model.mesh_path,
-          where + "model of obj_id " + std::to_string(obj_id) + " cannot be used: " + what);
-    }
-  }
-
   const render::GpuMesh& mesh(int obj_id, const std::string& where) {
     auto found = meshes_.find(obj_id);
     if (found != meshes_.end()) return *found->second;
-    auto gpu = std::make_unique<render::GpuMesh>(render::GpuMesh::upload(
-        load_model(obj_id, where, datasets::MeshLoadOptions{}.scale_to_metres)));
+    auto gpu =
+        std::make_unique<render::GpuMesh>(render::GpuMesh::upload(models_.prepared(obj_id, where)));
     return *meshes_.emplace(obj_id, std::move(gpu)).first->second;
   }
 
@@ -202,7 +245,7 @@ class VisibilityWorker {
     auto found = bop_models_.find(obj_id);
     if (found != bop_models_.end()) return *found->second;
     auto gpu = std::make_unique<render::BopModel>(
-        render::BopModel::upload(load_model(obj_id, where, 1.0)));
+        render::BopModel::upload(models_.file_units(obj_id, where)));
     return *bop_models_.emplace(obj_id, std::move(gpu)).first->second;
   }
 
@@ -257,6 +300,7 @@ class VisibilityWorker {
   }
 
   const datasets::BopDataset& dataset_;
+  SharedModels& models_;
   const VisibilityJobOptions& job_;
   const VisibilityOptions& options_;
   render::EglContext context_;
@@ -449,8 +493,9 @@ batch::BatchResult run_visibility_job(const VisibilityJobOptions& options) {
   job.fingerprint["masks"] = options.masks;
   job.fingerprint["overlays"] = options.overlays;
   job.input_digest = batch::bop_image_digest(dataset);
-  job.make_worker = [&dataset, &options]() -> batch::ItemFunction {
-    auto worker = std::make_shared<VisibilityWorker>(dataset, options);
+  SharedModels models(dataset);
+  job.make_worker = [&dataset, &options, &models]() -> batch::ItemFunction {
+    auto worker = std::make_shared<VisibilityWorker>(dataset, options, models);
     return [worker](const datasets::ImageKey& key) { return worker->run(key); };
   };
   // Set before the workers create their GL contexts (see render/context.hpp).

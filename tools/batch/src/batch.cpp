@@ -134,6 +134,19 @@ void run_worker(const BatchJob& job, const BatchOptions& options, WorkQueue& que
   // `process` (and the worker state it owns) is destroyed here, on its own thread.
 }
 
+// The process's peak resident memory (VmHWM of /proc/self/status, MiB), null where the
+// system does not tell.
+nlohmann::json peak_memory_mib() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) != 0) continue;
+    const long long kib = std::atoll(line.c_str() + 6);
+    if (kib > 0) return json_rounded(static_cast<double>(kib) / 1024.0, 1);
+  }
+  return nullptr;
+}
+
 void write_run_json(const fs::path& out_dir, const std::string& command,
                     const BatchOptions& options, std::size_t in_scope, const BatchResult& result) {
   nlohmann::json run = {
@@ -154,6 +167,7 @@ void write_run_json(const fs::path& out_dir, const std::string& command,
       {"images_per_second", result.computed > 0 && result.seconds > 0
                                 ? json_rounded(result.computed / result.seconds, 3)
                                 : nullptr},
+      {"peak_memory_mib", peak_memory_mib()},
       {"tool_version", CLUTTERSCOPE_VERSION}};
   write_json_atomically(out_dir / "run.json", run);
 }

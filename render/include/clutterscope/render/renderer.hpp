@@ -43,10 +43,26 @@ struct Intrinsics {
   void validate() const;
 };
 
+// What the renderer needs of a mesh besides its GPU buffers, computed once on the CPU and
+// shared by every context it is uploaded to (the workers of a run): the mesh, whether it is
+// closed (GpuMesh::State::closed_orientation) and each triangle's plane. Immutable.
+struct PreparedMesh {
+  std::shared_ptr<const datasets::Mesh> mesh;
+  int closed_orientation = 0;
+  std::vector<Eigen::Vector4d> planes;        // model-frame unit normal and offset (n . a)
+  std::vector<Eigen::Vector4f> planes_float;  // the same for the exact-depth shaders
+  Eigen::AlignedBox3f bounds;
+};
+
+// No context needed. Throws std::invalid_argument for a null mesh.
+std::shared_ptr<const PreparedMesh> prepare_mesh(std::shared_ptr<const datasets::Mesh> mesh);
+
 // A mesh uploaded to the GPU of the current context. Move-only.
 class GpuMesh {
  public:
-  static GpuMesh upload(const datasets::Mesh& mesh);  // needs a current context
+  // Need a current context; the first prepares the mesh (a copy) for this upload alone.
+  static GpuMesh upload(const datasets::Mesh& mesh);
+  static GpuMesh upload(std::shared_ptr<const PreparedMesh> prepared);
   GpuMesh(GpuMesh&&) noexcept;
   GpuMesh& operator=(GpuMesh&&) noexcept;
   GpuMesh(const GpuMesh&) = delete;
