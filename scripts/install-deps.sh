@@ -10,7 +10,7 @@ packages=(
   clang libclang-rt-14-dev
   # libraries
   libeigen3-dev nlohmann-json3-dev libcli11-dev libglm-dev libnanoflann-dev
-  libassimp-dev
+  libassimp-dev libembree-dev
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-calib3d-dev
   # headless OpenGL through libglvnd + Mesa (libgl1-mesa-dri is the software renderer)
   libegl-dev libopengl-dev libgl-dev libegl1 libopengl0 libegl-mesa0 libgl1-mesa-dri
