@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <clutterscope/render/context.hpp>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 
@@ -31,6 +32,33 @@ TEST(BenchCliGl, VisibilityPrintsTheRatiosAndBothThroughputs) {
                 std::string::npos,
             software_renderer())
       << run.output;
+}
+
+TEST(BenchCliGl, DenseVisibilityIsExactAgainstBopToolkitsMethodAndRunsTheCommand) {
+  std::string why;
+  if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+  const clutterscope::testing::CommandRun run = clutterscope::testing::run_merged(
+      "bench visibility --dense --images 3 --models 3 --objects 3 --triangles-min 2000 "
+      "--triangles-max 4000 --width 160 --height 120 --jobs 2 --job-images 20");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  for (const char* line :
+       {"(c) bop_toolkit's method", "(d) Embree ray casting", "drawn after the pixel-centre test",
+        "(target >= 20)", "the visibility command on a dense dataset of 20 images",
+        "rendered: --jobs 2 / --jobs 1 throughput"}) {
+    EXPECT_NE(run.output.find(line), std::string::npos) << line << "\n" << run.output;
+  }
+  // Our bop19 fields (only the triangles that can cover a pixel centre drawn, each object's
+  // rectangle only) equal bop_toolkit's procedure (every triangle, the whole canvas).
+  const std::string marker = "bop19 fields identical to bop_toolkit's method for ";
+  const std::size_t at = run.output.find(marker);
+  ASSERT_NE(at, std::string::npos) << run.output;
+  int identical = -1, instances = -2;
+  ASSERT_EQ(
+      std::sscanf(run.output.c_str() + at + marker.size(), "%d of %d", &identical, &instances), 2);
+  EXPECT_EQ(identical, instances);
+  EXPECT_EQ(instances, 9);
+  // Each run of the command reports its peak memory.
+  EXPECT_EQ(run.output.find("peak RSS     0.0 MiB"), std::string::npos) << run.output;
 }
 
 TEST(BenchCliGl, EstimatePrintsTheBreakdownAndTheTiledComparisons) {

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_support.hpp"
 #include "commands.hpp"
 
 namespace clutterscope::cli {
@@ -28,14 +29,6 @@ namespace clutterscope::cli {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-// CPU time of the whole process (llvmpipe's rasteriser threads included): on a machine shared
-// with other jobs, wall-clock time also counts the waits for a core.
-double process_cpu_seconds() {
-  timespec now{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
-  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
-}
 
 struct BenchEstimateArguments {
   std::string dataset;

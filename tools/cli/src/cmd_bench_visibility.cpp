@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <mutex>
@@ -27,13 +28,15 @@
 #include <thread>
 #include <vector>
 
+#include "bench_support.hpp"
+#include "bench_visibility_dense.hpp"
 #include "commands.hpp"
 
 namespace clutterscope::cli {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+namespace fs = std::filesystem;
 
 struct BenchArguments {
   int images = 50;
@@ -171,10 +174,6 @@ struct BenchContext {
   }
 };
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
 // (a) our visibility: Eq. 10 counts on the GPU, with BOP's 3x-canvas px_count_all.
 visibility::ImageVisibility ours(BenchContext& bench, const Workload& workload, std::size_t i) {
   return visibility::compute_image_visibility(bench.renderer, workload.camera,
@@ -207,73 +206,15 @@ std::vector<visibility::BopGtInfo> bop_toolkit_method(BenchContext& bench, const
   return infos;
 }
 
-struct Stats {
-  double mean = 0, median = 0, p90 = 0;
-};
-
-Stats stats_of(std::vector<double> values) {
-  Stats stats;
-  if (values.empty()) return stats;
-  std::sort(values.begin(), values.end());
-  for (double v : values) stats.mean += v;
-  stats.mean /= static_cast<double>(values.size());
-  stats.median = values[values.size() / 2];
-  stats.p90 = values[std::min(values.size() - 1,
-                              static_cast<std::size_t>(std::ceil(0.9 * values.size())) - 1)];
-  return stats;
-}
-
-struct ThroughputRun {
-  double seconds = 0;      // wall time
-  double cpu_seconds = 0;  // of the whole process (llvmpipe's rasterizer threads included)
-};
-
-double process_cpu_seconds() {
-  timespec time{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &time);
-  return static_cast<double>(time.tv_sec) + 1e-9 * static_cast<double>(time.tv_nsec);
-}
-
 // Computes (a) for every image with `jobs` threads, each with its own context, rasterising on
 // its own thread as in the batch runner.
 ThroughputRun throughput_run(const Workload& workload, int jobs) {
   const render::WorkerRasterisationScope rasterisation;
-  std::vector<std::unique_ptr<BenchContext>> contexts(static_cast<std::size_t>(jobs));
-  std::atomic<std::size_t> next{0};
-  std::atomic<int> ready{0};
-  std::atomic<bool> go{false};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  Clock::time_point start;
-  double cpu_start = 0;
-  std::vector<std::thread> threads;
-  for (int t = 0; t < jobs; ++t) {
-    threads.emplace_back([&, t] {
-      try {
-        contexts[t] = std::make_unique<BenchContext>(workload);
-        ours(*contexts[t], workload, 0);  // warm up: shaders, buffers
-        ++ready;
-        while (!go) std::this_thread::yield();
-        for (std::size_t i = next++; i < workload.poses.size(); i = next++) {
-          ours(*contexts[t], workload, i);
-        }
-        contexts[t].reset();  // GL objects go with their context, on its thread
-      } catch (...) {
-        contexts[t].reset();
-        std::lock_guard<std::mutex> lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-        ++ready;
-      }
-    });
-  }
-  while (ready < jobs) std::this_thread::yield();
-  start = Clock::now();
-  cpu_start = process_cpu_seconds();
-  go = true;
-  for (std::thread& thread : threads) thread.join();
-  const ThroughputRun run{seconds_since(start), process_cpu_seconds() - cpu_start};
-  if (failure) std::rethrow_exception(failure);
-  return run;
+  return timed_parallel_run(
+      jobs, workload.poses.size(), [&workload]() -> std::function<void(std::size_t)> {
+        auto bench = std::make_shared<BenchContext>(workload);
+        return [bench, &workload](std::size_t i) { ours(*bench, workload, i); };
+      });
 }
 
 void print_run(const char* label, const ThroughputRun& run, double images) {
@@ -338,16 +279,16 @@ void run_bench(const BenchArguments& arguments) {
       bop_toolkit_method(bench, workload, 0);
       if (arguments.per_image) std::printf("image,ours_ms,floor_ms,bop_toolkit_ms\n");
       for (std::size_t i = 0; i < workload.poses.size(); ++i) {
-        Clock::time_point start = Clock::now();
+        BenchClock::time_point start = BenchClock::now();
         const visibility::ImageVisibility a = ours(bench, workload, i);
         time_ours.push_back(seconds_since(start));
 
-        start = Clock::now();
+        start = BenchClock::now();
         const render::DepthLabelImage floor =
             bench.renderer.render(image, bench.instances(workload, i));
         time_floor.push_back(seconds_since(start));
 
-        start = Clock::now();
+        start = BenchClock::now();
         const std::vector<visibility::BopGtInfo> c = bop_toolkit_method(bench, workload, i);
         time_bop.push_back(seconds_since(start));
 
@@ -368,7 +309,7 @@ void run_bench(const BenchArguments& arguments) {
     }
   }
   if (!arguments.throughput_only) {
-    const Stats a = stats_of(time_ours), b = stats_of(time_floor), c = stats_of(time_bop);
+    const SampleStats a = stats_of(time_ours), b = stats_of(time_floor), c = stats_of(time_bop);
     std::printf("per image (ms)                          mean   median      p90\n");
     std::printf("(a) ours: Eq. 10 counts on the GPU  %8.2f %8.2f %8.2f\n", 1e3 * a.mean,
                 1e3 * a.median, 1e3 * a.p90);
@@ -389,15 +330,22 @@ void run_bench(const BenchArguments& arguments) {
 void add_bench_visibility_command(CLI::App& app, int* exit_code) {
   CLI::App* bench = &bench_command_group(app);
   auto arguments = std::make_shared<BenchArguments>();
+  auto dense = std::make_shared<DenseBenchArguments>();
+  auto dense_mode = std::make_shared<bool>(false);
   CLI::App* command = bench->add_subcommand(
       "visibility",
       "Per-image time of (a) our visibility, (b) one scene render with readback (the floor) and "
       "(c) bop_toolkit's method (each object alone on the 3Wx3H canvas, read back, compared on "
       "the CPU), on a generated workload; ratios (a)/(b), (c)/(a) and the throughput of --jobs "
-      "N against --jobs 1.");
-  command->add_option("--images", arguments->images, "images in the workload")
-      ->capture_default_str();
-  command->add_option("--objects", arguments->objects, "objects per image")->capture_default_str();
+      "N against --jobs 1. With --dense: BOP-like models of 30k-100k triangles, our bop19 and "
+      "rendered modes against bop_toolkit's method and Embree ray casting, then the visibility "
+      "command on a written dense dataset (--jobs scaling, peak memory at two sizes).");
+  CLI::Option* images =
+      command->add_option("--images", arguments->images, "images in the workload (--dense: 24)")
+          ->capture_default_str();
+  CLI::Option* objects =
+      command->add_option("--objects", arguments->objects, "objects per image (--dense: 6-10)")
+          ->capture_default_str();
   command->add_option("--triangles", arguments->triangles, "triangles per object")
       ->capture_default_str();
   command->add_option("--width", arguments->width, "image width")->capture_default_str();
@@ -408,8 +356,36 @@ void add_bench_visibility_command(CLI::App& app, int* exit_code) {
   command->add_flag("--per-image", arguments->per_image, "print each image's times as CSV");
   command->add_flag("--throughput-only", arguments->throughput_only,
                     "skip (a), (b) and (c): only the --jobs comparison");
-  command->callback([arguments, exit_code] {
-    run_bench(*arguments);
+  command->add_flag("--dense", *dense_mode,
+                    "the dense workload: models of --triangles-min to --triangles-max triangles");
+  command->add_option("--models", dense->models, "--dense: distinct models")->capture_default_str();
+  command
+      ->add_option("--triangles-min", dense->min_triangles,
+                   "--dense: triangles of the smallest model")
+      ->capture_default_str();
+  command
+      ->add_option("--triangles-max", dense->max_triangles,
+                   "--dense: triangles of the largest model")
+      ->capture_default_str();
+  command
+      ->add_option("--job-images", dense->job_images,
+                   "--dense: images of the dataset the visibility command runs on (and a "
+                   "tenth of them for the --jobs comparison); 0 skips those runs")
+      ->capture_default_str();
+  command->callback([arguments, dense, dense_mode, images, objects, exit_code] {
+    if (*dense_mode) {
+      if (images->count() > 0) dense->images = arguments->images;
+      if (objects->count() > 0) dense->min_objects = dense->max_objects = arguments->objects;
+      dense->width = arguments->width;
+      dense->height = arguments->height;
+      dense->jobs = arguments->jobs;
+      dense->seed = arguments->seed;
+      dense->per_image = arguments->per_image;
+      dense->executable = fs::read_symlink("/proc/self/exe").string();
+      run_dense_visibility_bench(*dense);
+    } else {
+      run_bench(*arguments);
+    }
     *exit_code = 0;
   });
 }
