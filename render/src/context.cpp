@@ -1,6 +1,8 @@
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 
+#include <cerrno>
+#include <climits>
 #include <clutterscope/render/context.hpp>
 #include <cstdlib>
 #include <cstring>
@@ -259,6 +261,21 @@ std::string gl_string(GLenum name) {
   return text != nullptr ? reinterpret_cast<const char*>(text) : "";
 }
 
+// The device index of CLUTTERSCOPE_EGL_DEVICE (unset or empty: -1, the automatic choice).
+int device_index_from_environment() {
+  const char* text = std::getenv("CLUTTERSCOPE_EGL_DEVICE");
+  if (text == nullptr || *text == '\0') return -1;
+  char* end = nullptr;
+  errno = 0;
+  const long value = std::strtol(text, &end, 10);
+  if (*text < '0' || *text > '9' || *end != '\0' || errno == ERANGE || value > INT_MAX) {
+    throw RenderError(std::string("CLUTTERSCOPE_EGL_DEVICE must be an EGL device index (an "
+                                  "integer >= 0), got '") +
+                      text + "'");
+  }
+  return static_cast<int>(value);
+}
+
 }  // namespace
 
 struct EglContext::State {
@@ -295,9 +312,11 @@ EglContext EglContext::create(const EglOptions& options) {
     throw RenderError("EglOptions::device_index must be >= -1, got " +
                       std::to_string(options.device_index));
   }
+  const int device_index =
+      options.device_index == -1 ? device_index_from_environment() : options.device_index;
   for (bool allow_second = true;; allow_second = false) {
     try {
-      EglContext context = create_on_display(options.device_index, allow_second);
+      EglContext context = create_on_display(device_index, allow_second);
       // The surfaceless platform may pick a GPU render node: the second screen must be the
       // same software renderer, or workers would not give identical results.
       if (context.state_->key.second == DisplayKind::kChosen || context.is_software()) {

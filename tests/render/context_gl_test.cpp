@@ -2,6 +2,7 @@
 
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/renderer.hpp>
+#include <cstdlib>
 #include <optional>
 #include <string>
 
@@ -43,6 +44,61 @@ TEST_F(ContextGl, ConcurrentSoftwareContextsAlternateBetweenTwoScreens) {
   first.reset();
   const EglContext fifth = EglContext::create();
   EXPECT_TRUE(on_software_device(fifth)) << fifth.display_description();
+}
+
+// Sets an environment variable for a scope and restores its previous value.
+class ScopedEnvironment {
+ public:
+  ScopedEnvironment(const char* name, const char* value) : name_(name) {
+    if (const char* previous = std::getenv(name)) previous_ = previous;
+    ::setenv(name, value, 1);
+  }
+  ~ScopedEnvironment() {
+    if (previous_) {
+      ::setenv(name_, previous_->c_str(), 1);
+    } else {
+      ::unsetenv(name_);
+    }
+  }
+  ScopedEnvironment(const ScopedEnvironment&) = delete;
+  ScopedEnvironment& operator=(const ScopedEnvironment&) = delete;
+
+ private:
+  const char* name_;
+  std::optional<std::string> previous_;
+};
+
+// CLUTTERSCOPE_EGL_DEVICE picks the device when the options leave the choice automatic; a
+// value that is no device index is refused, naming the variable.
+TEST_F(ContextGl, EglDeviceVariableSelectsTheDeviceAndIsValidated) {
+  for (const char* bad : {"x", "-1", "1.5", " 0", "0x1", "99999999999"}) {
+    const ScopedEnvironment variable("CLUTTERSCOPE_EGL_DEVICE", bad);
+    try {
+      EglContext::create();
+      ADD_FAILURE() << "accepted CLUTTERSCOPE_EGL_DEVICE=" << bad;
+    } catch (const RenderError& error) {
+      EXPECT_NE(std::string(error.what()).find("CLUTTERSCOPE_EGL_DEVICE"), std::string::npos)
+          << error.what();
+    }
+  }
+  {
+    const ScopedEnvironment variable("CLUTTERSCOPE_EGL_DEVICE", "99999");
+    EXPECT_THROW(EglContext::create(), RenderError);  // no such device
+  }
+  std::optional<EglContext> device0;
+  try {
+    device0.emplace(EglContext::create(EglOptions{0}));
+  } catch (const RenderError& error) {
+    GTEST_SKIP() << "no EGL device 0 (surfaceless platform only): " << error.what();
+  }
+  ASSERT_EQ(device0->display_description(), "EGL device 0");
+  {
+    const ScopedEnvironment variable("CLUTTERSCOPE_EGL_DEVICE", "99999");
+    EXPECT_EQ(EglContext::create(EglOptions{0}).display_description(), "EGL device 0")
+        << "an index in the options comes before the variable";
+  }
+  const ScopedEnvironment variable("CLUTTERSCOPE_EGL_DEVICE", "0");
+  EXPECT_EQ(EglContext::create().display_description(), "EGL device 0");
 }
 
 // Displays are terminated with their last context and initialised again for the next one.

@@ -2,6 +2,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -138,15 +139,15 @@ cv::Rect projected_box(const Eigen::Vector3d& min, const Eigen::Vector3d& max,
 // z (mm), 0 = background.
 struct RayCaster {
   RTCScene scene;
-  Eigen::Matrix3d Rt;      // camera to model rotation (R^T)
-  Eigen::Vector3f origin;  // the camera centre in the model frame (-R^T t)
+  Eigen::Matrix3d to_model;  // camera to model frame: R^-1 (R^T for a rotation)
+  Eigen::Vector3f origin;    // the camera centre in the model frame: -R^-1 t
   const Canvas& canvas;
 
   // The model-frame direction of the ray through the centre of canvas pixel (u, v).
   Eigen::Vector3f direction(int u, int v) const {
     const Eigen::Vector3d d((u + 0.5 - canvas.cx) / canvas.fx, (v + 0.5 - canvas.cy) / canvas.fy,
                             1.0);
-    return (Rt * d).cast<float>();
+    return (to_model * d).cast<float>();
   }
 
   // Packets of 8 rays (rtcIntersect8) over tiles of 4 x 2 pixels: measured on AVX2 (2 cores,
@@ -185,7 +186,7 @@ struct RayCaster {
         rtcIntersect8(valid, scene, &context, &packet);
         for (int k = 0; k < kRays; ++k) {
           if (valid[k] == 0) continue;
-          // d.z = 1 in the camera frame, so the hit distance along the ray is the camera z.
+          // d.z = 1 in the camera frame: the hit distance is the camera z.
           depth.ptr<float>(v0 + k / kTileWidth)[u0 + k % kTileWidth] =
               packet.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID ? packet.ray.tfar[k] : 0.0f;
         }
@@ -267,9 +268,10 @@ std::vector<visibility::BopGtInfo> EmbreeBopReference::compute(
                                   " has mesh index " + std::to_string(objects[i].mesh) + ", " +
                                   std::to_string(state_->meshes.size()) + " meshes built");
     }
-    if (!objects[i].R.allFinite() || !objects[i].t.allFinite()) {
+    const double det = objects[i].R.determinant();
+    if (!objects[i].R.allFinite() || !objects[i].t.allFinite() || !std::isfinite(det) || det == 0) {
       throw std::invalid_argument("EmbreeBopReference: object " + std::to_string(i) +
-                                  " has a non-finite pose");
+                                  " has a non-finite or singular pose");
     }
   }
   const visibility::BopCamera bop_camera{camera.fx(), camera.fy(), camera.cx(), camera.cy()};
@@ -287,8 +289,12 @@ std::vector<visibility::BopGtInfo> EmbreeBopReference::compute(
     cv::Rect window;  // image coordinates
     cv::Mat model_mm;
     if (!rect.empty()) {
-      const Eigen::Matrix3d Rt = object.R.transpose();
-      const RayCaster caster{mesh.scene.get(), Rt, (-(Rt * object.t)).cast<float>(), canvas};
+      // The inverse, not R^T: a pose that is not exactly orthonormal (scene_gt.json's printed
+      // digits) is cast as the rasteriser draws it. R (o + s d_model) + t = s d, so the hit
+      // distance s is the camera z.
+      const Eigen::Matrix3d to_model = object.R.inverse();
+      const RayCaster caster{mesh.scene.get(), to_model, (-(to_model * object.t)).cast<float>(),
+                             canvas};
       const cv::Mat depth = caster.trace(rect);
       silhouette = silhouette_of(depth, rect, image_on_canvas.tl());
       const cv::Rect overlap = rect & image_on_canvas;
