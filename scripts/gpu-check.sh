@@ -197,7 +197,7 @@ main() {
     step "bench visibility" timeout "$bench_timeout" "$binary" bench visibility --images 4 \
       --objects 3 --triangles 200 --width 160 --height 120 --jobs 2
     step "bench visibility --dense" timeout "$bench_timeout" "$binary" bench visibility --dense \
-      --images 2
+      --images 2 --models 3 --triangles-min 2000 --triangles-max 4000 --job-images 20
     step "bench estimate" timeout "$bench_timeout" "$binary" bench estimate "$tray10" --images 1 \
       --particles 10 --iterations 1 --particles-list 8,10 --rounds 2
     step "GL tests" timeout "$tests_timeout" ctest --test-dir "$build" -L gl -j"$(nproc)" \
