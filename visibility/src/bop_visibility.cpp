@@ -106,6 +106,31 @@ BopGtInfo compute_bop_gt_info(const cv::Mat& model_depth_mm, const CanvasSilhoue
       depth_to_distance(test_depth_mm, camera), camera, options, visib_mask);
 }
 
+CanvasRender cut_canvas_render(const cv::Mat& depth, const cv::Rect& rect,
+                               const cv::Rect& image_on_canvas) {
+  CV_Assert(rect.empty() || (depth.type() == CV_32F && depth.size() == rect.size()));
+  CanvasRender cut;
+  if (!rect.empty()) {
+    const cv::Mat mask = depth > 0;
+    cut.silhouette.pixel_count = cv::countNonZero(mask);
+    if (cut.silhouette.pixel_count > 0) {
+      std::vector<cv::Point> points;
+      cv::findNonZero(mask, points);
+      cut.silhouette.bbox = cv::boundingRect(points) + rect.tl() - image_on_canvas.tl();
+    }
+    const cv::Rect overlap = rect & image_on_canvas;
+    if (!overlap.empty()) {
+      cut.window = overlap - image_on_canvas.tl();
+      cut.model_mm = depth(overlap - rect.tl());
+    }
+  }
+  if (cut.window.empty()) {  // nothing in the image: a 1-pixel window of background
+    cut.window = cv::Rect(0, 0, 1, 1);
+    cut.model_mm = cv::Mat(1, 1, CV_32F, cv::Scalar(0));
+  }
+  return cut;
+}
+
 BopGtInfo compute_bop_gt_info_in_window(const cv::Mat& model_depth_mm, const cv::Rect& window,
                                         const CanvasSilhouette& canvas,
                                         const cv::Mat& test_distance, const BopCamera& camera,

@@ -84,12 +84,6 @@ std::vector<render::Instance> labelled(const std::vector<render::Instance>& obje
   return instances;
 }
 
-cv::Rect bounding_rect_of(const cv::Mat& mask) {
-  std::vector<cv::Point> points;
-  cv::findNonZero(mask, points);
-  return points.empty() ? cv::Rect() : cv::boundingRect(points);
-}
-
 void compute_rendered(render::Renderer& renderer, const render::Intrinsics& intrinsics,
                       const std::vector<render::Instance>& instances, ImageVisibility* result,
                       ImageMasks* masks) {
@@ -157,29 +151,14 @@ void compute_bop(render::BopDepthRenderer& renderer, const datasets::Camera& cam
     const cv::Rect rect =
         render::BopDepthRenderer::projected_rect(*object.model, object.R, object.t, canvas);
     const cv::Mat depth = renderer.render_object(*object.model, object.R, object.t, canvas, rect);
-    CanvasSilhouette silhouette;
-    cv::Rect window;  // image coordinates
-    cv::Mat model_mm;
-    if (!rect.empty()) {
-      const cv::Mat mask = depth > 0;
-      silhouette.pixel_count = cv::countNonZero(mask);
-      const cv::Rect box = bounding_rect_of(mask);
-      if (!box.empty()) silhouette.bbox = box + rect.tl() - image_on_canvas.tl();
-      const cv::Rect overlap = rect & image_on_canvas;
-      if (!overlap.empty()) {
-        window = overlap - image_on_canvas.tl();
-        model_mm = depth(overlap - rect.tl());
-      }
-    }
-    if (window.empty()) {  // nothing in the image: a 1-pixel window of background
-      window = cv::Rect(0, 0, 1, 1);
-      model_mm = cv::Mat(1, 1, CV_32F, cv::Scalar(0));
-    }
+    const CanvasRender cut = cut_canvas_render(depth, rect, image_on_canvas);
+    const cv::Rect& window = cut.window;  // image coordinates
+    const cv::Mat& model_mm = cut.model_mm;
     if (gt_depth_mm) nearest_surface(model_mm, (*gt_depth_mm)(window));
     cv::Mat visib;
     ObjectVisibility& result_object = result->objects[i];
     result_object.info =
-        compute_bop_gt_info_in_window(model_mm, window, silhouette, test_distance, bop_camera,
+        compute_bop_gt_info_in_window(model_mm, window, cut.silhouette, test_distance, bop_camera,
                                       bop_options, masks ? &visib : nullptr);
     // V^s in BOP modes: sum px_count_visib / sum px_count_all, the px_count_all-weighted
     // mean of visib_fract.

@@ -196,26 +196,6 @@ struct RayCaster {
   }
 };
 
-// The silhouette's pixel count and bbox (image coordinates) from the object's canvas depth of
-// `rect`, as canvas_silhouette computes them from depth_gt_large.
-visibility::CanvasSilhouette silhouette_of(const cv::Mat& depth, const cv::Rect& rect,
-                                           const cv::Point& image_origin) {
-  visibility::CanvasSilhouette silhouette;
-  int u0 = std::numeric_limits<int>::max(), v0 = u0, u1 = -1, v1 = -1;
-  for (int v = 0; v < depth.rows; ++v) {
-    const float* row = depth.ptr<float>(v);
-    for (int u = 0; u < depth.cols; ++u) {
-      if (!(row[u] > 0)) continue;
-      ++silhouette.pixel_count;
-      u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
-    }
-  }
-  if (silhouette.pixel_count > 0) {
-    silhouette.bbox = cv::Rect(u0, v0, u1 - u0 + 1, v1 - v0 + 1) + rect.tl() - image_origin;
-  }
-  return silhouette;
-}
-
 }  // namespace
 
 struct EmbreeBopReference::State {
@@ -285,9 +265,7 @@ std::vector<visibility::BopGtInfo> EmbreeBopReference::compute(
   for (const EmbreeObject& object : objects) {
     const MeshScene& mesh = state_->meshes[object.mesh];
     const cv::Rect rect = projected_box(mesh.min, mesh.max, object.R, object.t, canvas);
-    visibility::CanvasSilhouette silhouette;
-    cv::Rect window;  // image coordinates
-    cv::Mat model_mm;
+    cv::Mat depth;
     if (!rect.empty()) {
       // The inverse, not R^T: a pose that is not exactly orthonormal (scene_gt.json's printed
       // digits) is cast as the rasteriser draws it. R (o + s d_model) + t = s d, so the hit
@@ -295,20 +273,12 @@ std::vector<visibility::BopGtInfo> EmbreeBopReference::compute(
       const Eigen::Matrix3d to_model = object.R.inverse();
       const RayCaster caster{mesh.scene.get(), to_model, (-(to_model * object.t)).cast<float>(),
                              canvas};
-      const cv::Mat depth = caster.trace(rect);
-      silhouette = silhouette_of(depth, rect, image_on_canvas.tl());
-      const cv::Rect overlap = rect & image_on_canvas;
-      if (!overlap.empty()) {
-        window = overlap - image_on_canvas.tl();
-        model_mm = depth(overlap - rect.tl());
-      }
+      depth = caster.trace(rect);
     }
-    if (window.empty()) {  // nothing in the image: a 1-pixel window of background
-      window = cv::Rect(0, 0, 1, 1);
-      model_mm = cv::Mat(1, 1, CV_32F, cv::Scalar(0));
-    }
-    result.push_back(visibility::compute_bop_gt_info_in_window(model_mm, window, silhouette,
-                                                               test_distance, bop_camera, options));
+    const visibility::CanvasRender cut =
+        visibility::cut_canvas_render(depth, rect, image_on_canvas);
+    result.push_back(visibility::compute_bop_gt_info_in_window(
+        cut.model_mm, cut.window, cut.silhouette, test_distance, bop_camera, options));
   }
   // Errors are per thread: a failed rtcIntersect8 (e.g. a build without packets) shows here.
   check_device(state_->device.get(), "ray casting");

@@ -91,6 +91,18 @@ BopGtInfo compute_bop_gt_info(const cv::Mat& model_depth_mm, const CanvasSilhoue
                               const cv::Mat& test_depth_mm, const BopCamera& camera,
                               const BopVisibilityOptions& options, cv::Mat* visib_mask = nullptr);
 
+// One object rendered alone over `rect` of bop_toolkit's canvas (`depth`, 0 = background), cut
+// the way compute_bop_gt_info_in_window takes it: the canvas silhouette (bbox in image
+// coordinates), the object's window in the image (a 1-pixel window of background when it does
+// not reach the image) and the model depth in that window.
+struct CanvasRender {
+  CanvasSilhouette silhouette;
+  cv::Rect window;
+  cv::Mat model_mm;
+};
+CanvasRender cut_canvas_render(const cv::Mat& depth, const cv::Rect& rect,
+                               const cv::Rect& image_on_canvas);
+
 // The same for an object whose rendering is zero outside `window` (a rectangle of the
 // image): model_depth_mm is the window's content, test_distance the distance image of the
 // whole measured depth (depth_to_distance, computed once per image). Identical results, with
