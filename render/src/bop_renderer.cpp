@@ -207,16 +207,7 @@ void BopDepthRenderer::State::draw(const BopModel::State& model, const std::arra
   find_covering_triangles(mesh.positions, mesh.triangles, clip_from_model, window,
                           FaceSelection::kAll, &state.covering);
   state.counts.drawn += state.covering.kept;
-  if (state.covering.kept > 0) {
-    // The element binding is the vertex array's: borrow it for this draw, then give it back.
-    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, state.covering_indices.get());
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-                 static_cast<GLsizeiptr>(state.covering.indices.size() * sizeof(std::uint32_t)),
-                 state.covering.indices.data(), GL_STREAM_DRAW);
-    glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(state.covering.indices.size()),
-                   GL_UNSIGNED_INT, nullptr);
-    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, model.buffers.indices.get());
-  }
+  gl::draw_index_subset(state.covering_indices, state.covering.indices, model.buffers.indices);
   glBindVertexArray(0);
 }
 

@@ -74,6 +74,17 @@ void check_uploadable(const datasets::Mesh& mesh, const char* who) {
   }
 }
 
+void draw_index_subset(const Buffer& scratch, const std::vector<std::uint32_t>& indices,
+                       const Buffer& own_indices) {
+  if (indices.empty()) return;
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, scratch.get());
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+               static_cast<GLsizeiptr>(indices.size() * sizeof(std::uint32_t)), indices.data(),
+               GL_STREAM_DRAW);
+  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(indices.size()), GL_UNSIGNED_INT, nullptr);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, own_indices.get());
+}
+
 MeshBuffers upload_mesh_buffers(const datasets::Mesh& mesh) {
   MeshBuffers buffers{make_vertex_array(), make_buffer(), make_buffer()};
   glBindVertexArray(buffers.vertex_array.get());

@@ -21,6 +21,11 @@ struct MeshBuffers {
 };
 MeshBuffers upload_mesh_buffers(const datasets::Mesh& mesh);
 
+// Draws `indices` (three per triangle) of the bound vertex array through `scratch`, then gives
+// the vertex array back its own element buffer `own_indices` (the binding is the array's).
+void draw_index_subset(const Buffer& scratch, const std::vector<std::uint32_t>& indices,
+                       const Buffer& own_indices);
+
 // Compiles and links a vertex + fragment program. Throws RenderError with `what` and the
 // driver's log when either step fails.
 Program link_program(const char* vertex_source, const char* fragment_source, const char* what);

@@ -102,15 +102,7 @@ void Renderer::State::draw(const detail::Program& program, const Instance& insta
   find_covering_triangles(mesh.mesh().positions, mesh.mesh().triangles, clip_from_model, window,
                           faces, &covering);
   counts.drawn += covering.kept;
-  if (covering.kept == 0) return;
-  // The element binding is the vertex array's: borrow it for this draw, then give it back.
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, covering_indices.get());
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER,
-               static_cast<GLsizeiptr>(covering.indices.size() * sizeof(std::uint32_t)),
-               covering.indices.data(), GL_STREAM_DRAW);
-  glDrawElements(GL_TRIANGLES, static_cast<GLsizei>(covering.indices.size()), GL_UNSIGNED_INT,
-                 nullptr);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, mesh.buffers.indices.get());
+  gl::draw_index_subset(covering_indices, covering.indices, mesh.buffers.indices);
 }
 
 const GpuMesh::State& Renderer::State::bind(const GpuMesh& gpu_mesh,
