@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Builds the libFuzzer targets of tests/fuzz into build-fuzz/ (clang, ASan + UBSan) and runs
 # each one from its seed corpus (tests/fuzz/corpus/NAME) and its saved crash inputs
-# (tests/fuzz/regressions/NAME) for CLUTTERSCOPE_FUZZ_SECONDS seconds (default 25).
+# (tests/fuzz/regressions/NAME) for CLUTTERSCOPE_FUZZ_SECONDS seconds (default 25), as many
+# targets at a time as CLUTTERSCOPE_BUILD_JOBS (default: the number of cores).
 # Arguments: target names (default: every target with a corpus folder).
 # New inputs go to build-fuzz/fuzz-corpus/NAME, crash inputs to build-fuzz/fuzz-artifacts/NAME,
 # the fuzzer's log to build-fuzz/fuzz-logs/NAME.log. Fails when any target crashes, leaks,
@@ -27,25 +28,44 @@ if [ "${#targets[@]}" -eq 0 ]; then
   for dir in tests/fuzz/corpus/*/; do targets+=("$(basename "$dir")"); done
 fi
 
-failed=()
-for target in "${targets[@]}"; do
-  binary="build-fuzz/tests/fuzz/fuzz_$target"
-  work="build-fuzz/fuzz-corpus/$target"
-  artifacts="build-fuzz/fuzz-artifacts/$target"
-  log="build-fuzz/fuzz-logs/$target.log"
+# Runs one target; its result goes to $log.status (the exit status) for the summary below.
+fuzz_one() {
+  local target="$1"
+  local binary="build-fuzz/tests/fuzz/fuzz_$target"
+  local work="build-fuzz/fuzz-corpus/$target"
+  local artifacts="build-fuzz/fuzz-artifacts/$target"
+  local log="build-fuzz/fuzz-logs/$target.log"
   mkdir -p "$work" "$artifacts" "$(dirname "$log")"
-  inputs=("tests/fuzz/corpus/$target")
+  local inputs=("tests/fuzz/corpus/$target")
   if [ -d "tests/fuzz/regressions/$target" ]; then inputs+=("tests/fuzz/regressions/$target"); fi
-  start=$SECONDS
-  status=0
+  local start=$SECONDS status=0
   "$binary" -max_total_time="$seconds" -timeout="$timeout_s" -rss_limit_mb=2048 \
     -print_final_stats=1 -artifact_prefix="$artifacts/" "$work" "${inputs[@]}" >"$log" 2>&1 ||
     status=$?
+  echo "$status $((SECONDS - start))" >"$log.status"
+}
+
+# One target per core at a time: each runs its full time, the smoke takes 1/jobs of the wall time.
+for target in "${targets[@]}"; do
+  while [ "$(jobs -rp | wc -l)" -ge "$jobs" ]; do wait -n || true; done
+  rm -f "build-fuzz/fuzz-logs/$target.log.status"
+  fuzz_one "$target" &
+done
+wait
+
+failed=()
+for target in "${targets[@]}"; do
+  log="build-fuzz/fuzz-logs/$target.log"
+  if ! read -r status elapsed 2>/dev/null <"$log.status"; then
+    echo "fuzz: $target: FAILED, the run left no result (log $log)"
+    failed+=("$target")
+    continue
+  fi
   executions=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
   if [ "$status" -eq 0 ]; then
-    echo "fuzz: $target: ${executions:-?} executions in $((SECONDS - start)) s, no crash"
+    echo "fuzz: $target: ${executions:-?} executions in $elapsed s, no crash"
   else
-    echo "fuzz: $target: FAILED (exit $status) after $((SECONDS - start)) s; log $log:"
+    echo "fuzz: $target: FAILED (exit $status) after $elapsed s; log $log:"
     grep -E "ERROR|SUMMARY|Test unit written|runtime error" "$log" | head -20 || true
     tail -40 "$log"
     failed+=("$target")

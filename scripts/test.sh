@@ -7,7 +7,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 bash scripts/build.sh
-(cd build && ctest --output-on-failure --timeout 900 "$@")
+(cd build && ctest --output-on-failure --timeout 900 -j "${CLUTTERSCOPE_BUILD_JOBS:-$(nproc)}" "$@")
 if [ "${CLUTTERSCOPE_QUICK:-0}" = 1 ]; then
   echo "test: CLUTTERSCOPE_QUICK=1, sanitizer suite and fuzz smoke skipped"
   exit 0
