@@ -16,7 +16,7 @@ memory_test='^Generator\.ThousandScenesOfTenObjectsRunInConstantMemory$'
 # Left out here (they run in the normal suite): the accuracy tests repeat `estimate` over 20
 # trays each and the estimate benchmark times 200 mixture products three ways, code that the
 # EstimateGl.*, Product.* and Nbp.* tests run under the sanitizers too; together they took 538 s
-# of the GL tests' 1170 s under ASan + UBSan (2026-12-03), and CI has 90 minutes.
+# of the GL tests' 1161 s under ASan + UBSan (2026-12-03), and CI has 90 minutes.
 repetition_tests='^(EstimateAccuracyGl\..*|BenchCliGl\.EstimatePrintsTheBreakdownAndTheTiledComparisons)$'
 cd build-asan
 # 1. Every test without GL, leaks included.
