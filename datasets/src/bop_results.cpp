@@ -21,6 +21,15 @@ std::string_view trimmed(std::string_view text) {
   return text.substr(first, text.find_last_not_of(kSpaces) - first + 1);
 }
 
+// Python's int() and float(), which bop_toolkit parses with, accept a leading '+'; from_chars
+// does not.
+std::string_view without_plus(std::string_view number) {
+  if (number.size() > 1 && number[0] == '+' && number[1] != '+' && number[1] != '-') {
+    number.remove_prefix(1);
+  }
+  return number;
+}
+
 // Shortest text that round-trips, for messages.
 std::string number_text(double value) {
   char text[32];
@@ -45,7 +54,7 @@ class LineParser {
   }
 
   int id(std::string_view text, const char* field) const {
-    const std::string_view value = trimmed(text);
+    const std::string_view value = without_plus(trimmed(text));
     int id = 0;
     const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), id);
     if (value.empty() || error != std::errc() || end != value.data() + value.size() || id < 0) {
@@ -55,7 +64,7 @@ class LineParser {
   }
 
   double number(std::string_view text, const char* field) const {
-    const std::string_view value = trimmed(text);
+    const std::string_view value = without_plus(trimmed(text));
     double number = 0;
     const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), number);
     if (value.empty() || error != std::errc() || end != value.data() + value.size() ||

@@ -60,6 +60,11 @@ TEST(BopResults, HeaderIsOptionalAndWindowsLineEndsAndSpacesAreAccepted) {
   ASSERT_EQ(estimates.size(), 1u);
   EXPECT_EQ(estimates[0].im_id, 1);
   EXPECT_EQ(estimates[0].time_s, -1.0);
+  // A leading '+', as Python's int() and float() accept it.
+  const auto plus = parse_bop_results(row("+0,1,8", "+0.5", kQuarterTurn, "+1 2 3", "+2"), kFile);
+  EXPECT_EQ(plus[0].score, 0.5);
+  EXPECT_EQ(plus[0].model_to_camera.translation().x(), 0.001);
+  EXPECT_EQ(plus[0].time_s, 2.0);
   // No final line break.
   EXPECT_EQ(parse_bop_results(kHeader + "0,1,8,0.5," + kQuarterTurn + ",1 2 3,2", kFile).size(),
             1u);
@@ -103,6 +108,8 @@ TEST(BopResults, IdsMustBeNonNegativeIntegers) {
                   {"line 2, field scene_id", "'x'"});
   expect_mentions(parse_error(row("0,,8", "0.5", kQuarterTurn, "1 2 3", "1")),
                   {"line 1, field im_id", "''"});
+  expect_mentions(parse_error(row("0,+-1,8", "0.5", kQuarterTurn, "1 2 3", "1")),
+                  {"line 1, field im_id", "'+-1'"});
 }
 
 TEST(BopResults, NumbersMustBeFinite) {
