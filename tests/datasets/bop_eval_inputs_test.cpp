@@ -1,8 +1,9 @@
-// Inputs of BOP's pose errors: model vertices read as bop_toolkit reads them, and the
-// symmetries of models_info.json.
+// Inputs of BOP's pose evaluation: model vertices read as bop_toolkit reads them, the
+// symmetries of models_info.json and the visible fractions of scene_gt_info.json.
 
 #include <gtest/gtest.h>
 
+#include <clutterscope/datasets/bop_gt_info.hpp>
 #include <clutterscope/datasets/bop_pose_models.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/mesh.hpp>
@@ -188,6 +189,38 @@ TEST(ModelSymmetriesOfModelsInfo, MalformedFileIsRefused) {
                   {"models_info.json", "not an integer id"});
   expect_mentions(dataset_error([] { read_model_symmetries("/nonexistent/models_info.json"); }),
                   {"/nonexistent/models_info.json"});
+}
+
+TEST(SceneGtVisibFract, ReadsEveryInstanceInOrder) {
+  const auto images = read_scene_gt_visib_fract(
+      fs::path(CLUTTERSCOPE_SOURCE_DIR) /
+          "tests/scene_estimation/data/bop_eval_reference/sample_a/test/000003/scene_gt_info.json",
+      3);
+  ASSERT_EQ(images.size(), 1u);
+  const std::vector<double>& fractions = images.at(138);
+  ASSERT_EQ(fractions.size(), 4u);
+  EXPECT_EQ(fractions[0], 0.18290976917696433);
+  EXPECT_EQ(fractions[1], 1.0);
+  EXPECT_EQ(fractions[2], 0.0);  // the mug outside the image
+  EXPECT_EQ(fractions[3], 0.9662827065374934);
+}
+
+TEST(SceneGtVisibFract, BadEntriesNameSceneImageAndGt) {
+  const fs::path file = "test/000003/scene_gt_info.json";
+  const auto error = [&](const std::string& text) {
+    return dataset_error([&] { parse_scene_gt_visib_fract(text, file, 3); });
+  };
+  expect_mentions(
+      error("{\"7\": [{\"visib_fract\": 0.5}, {\"visib_fract\": 1.5}]}"),
+      {"scene_gt_info.json", "scene 3, image 7, gt 1", "visib_fract must be in [0, 1]"});
+  expect_mentions(error("{\"7\": [{\"px_count_all\": 5}]}"),
+                  {"scene 3, image 7, gt 0", "visib_fract is missing"});
+  expect_mentions(error("{\"7\": [{\"visib_fract\": \"0.5\"}]}"),
+                  {"scene 3, image 7, gt 0", "visib_fract must be a number"});
+  expect_mentions(error("{\"7\": {}}"), {"scene 3, image 7", "expected a list"});
+  expect_mentions(error("{\"7\": [1]}"), {"scene 3, image 7, gt 0", "expected an object"});
+  expect_mentions(error("[]"), {"scene_gt_info.json", "expected an object"});
+  expect_mentions(error("{\"7\": ["), {"scene_gt_info.json", "malformed JSON"});
 }
 
 }  // namespace

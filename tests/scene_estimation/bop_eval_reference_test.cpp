@@ -3,8 +3,8 @@
 // data/bop_eval_reference/sample_a (models_info.json with test symmetries, scene_gt_info.json,
 // test targets, three results files and what bop_toolkit computed for them; see its README).
 // The chain is the one `evaluate` will run: BopDataset (GT, K, diameters),
-// read_model_symmetries, read_bop_results, load_model_vertices, the estimator's MSSD / MSPD and
-// scores.
+// read_scene_gt_visib_fract, read_model_symmetries, read_bop_results, load_model_vertices, the
+// estimator's MSSD / MSPD and scores.
 //
 // Acceptance (issue 24): every MSSD and MSPD within 1e-6 relative of bop_toolkit's, AR_MSSD
 // and AR_MSPD within 1e-6. The test prints the largest deviations it measured.
@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/datasets/bop_gt_info.hpp>
 #include <clutterscope/datasets/bop_pose_models.hpp>
 #include <clutterscope/datasets/bop_results.hpp>
 #include <clutterscope/estimator/bop_pose_errors.hpp>
@@ -129,14 +130,16 @@ TEST_P(BopEvalReference, MssdMspdAndRecallsMatchBopToolkit) {
   for (const auto& [image, objects] : targets.images) {
     const auto [scene_id, im_id] = image;
     const datasets::SceneView view = dataset.load({"test", scene_id, im_id});
-    const Json gt_info = read_json(kReference / "test" / datasets::six_digits(scene_id) /
-                                   "scene_gt_info.json")[std::to_string(im_id)];
+    const std::vector<double> visib_fract =
+        datasets::read_scene_gt_visib_fract(
+            kReference / "test" / datasets::six_digits(scene_id) / "scene_gt_info.json", scene_id)
+            .at(im_id);
     estimator::BopImageErrors mssd_image;
     mssd_image.scene_id = scene_id;
     mssd_image.im_id = im_id;
     mssd_image.targets = objects;
     for (std::size_t k = 0; k < view.objects.size(); ++k) {
-      mssd_image.gt.push_back({view.objects[k].obj_id, gt_info[k]["visib_fract"].get<double>()});
+      mssd_image.gt.push_back({view.objects[k].obj_id, visib_fract.at(k)});
     }
     estimator::BopImageErrors mspd_image = mssd_image;
     const double width_factor = 640.0 / view.camera.width;
