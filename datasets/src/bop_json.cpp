@@ -195,24 +195,31 @@ Eigen::Matrix3d row_major_matrix(const Json& value, const char* field,
   return matrix;
 }
 
-Eigen::Matrix3d rotation(const Json& value, const char* field, const FieldContext& context,
-                         double tolerance) {
-  const Eigen::Matrix3d matrix = row_major_matrix(value, field, context);
+bool is_rotation(const Eigen::Matrix3d& matrix, double tolerance, std::string* why) {
   const double orthonormality_error = rotation_orthonormality_error(matrix);
   if (orthonormality_error > tolerance) {
     std::ostringstream message;
-    message << field << " is not a rotation: |R^T R - I| = " << orthonormality_error << " exceeds "
-            << tolerance;
-    context.fail(message.str());
+    message << "not a rotation: |R^T R - I| = " << orthonormality_error << " exceeds " << tolerance;
+    if (why) *why = message.str();
+    return false;
   }
   // Within the tolerance det(R)^2 = det(R^T R) is within about 3 tolerance of 1, so this
   // refuses reflections (det = -1) and nothing the orthonormality check accepted otherwise.
   const double determinant = matrix.determinant();
   if (std::abs(determinant - 1.0) > 3 * tolerance) {
     std::ostringstream message;
-    message << field << " is not a rotation: det(R) = " << determinant << ", expected +1";
-    context.fail(message.str());
+    message << "not a rotation: det(R) = " << determinant << ", expected +1";
+    if (why) *why = message.str();
+    return false;
   }
+  return true;
+}
+
+Eigen::Matrix3d rotation(const Json& value, const char* field, const FieldContext& context,
+                         double tolerance) {
+  const Eigen::Matrix3d matrix = row_major_matrix(value, field, context);
+  std::string why;
+  if (!is_rotation(matrix, tolerance, &why)) context.fail(std::string(field) + " is " + why);
   return matrix;
 }
 

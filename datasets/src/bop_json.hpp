@@ -41,6 +41,9 @@ std::vector<double> finite_numbers(const Json& value, const char* field, size_t 
                                    const FieldContext& context);
 // A 3x3 matrix from 9 row-major values.
 Eigen::Matrix3d row_major_matrix(const Json& value, const char* field, const FieldContext& context);
+// Whether `matrix` is a rotation within `tolerance`: max |R^T R - I| at most the tolerance and
+// det(R) within 3 tolerance of +1; otherwise `why` says which ("not a rotation: ...").
+bool is_rotation(const Eigen::Matrix3d& matrix, double tolerance, std::string* why);
 // A rotation: 9 row-major values with |R^T R - I| (largest entry) within `tolerance` and
 // det(R) > 0, returned exactly as given (no re-orthonormalisation: bop_toolkit renders the
 // stored values, and exact scene_gt_info.json counts depend on it). The default tolerance

@@ -25,11 +25,17 @@
 
 namespace clutterscope::datasets {
 
-Mesh load_mesh(const std::filesystem::path& path, const MeshLoadOptions& options) {
-  if (!(options.scale_to_metres > 0) || !std::isfinite(options.scale_to_metres)) {
+namespace detail {
+
+void check_scale(double scale_to_metres) {
+  if (!(scale_to_metres > 0) || !std::isfinite(scale_to_metres)) {
     throw std::invalid_argument("MeshLoadOptions::scale_to_metres must be > 0, got " +
-                                std::to_string(options.scale_to_metres));
+                                std::to_string(scale_to_metres));
   }
+}
+
+// The whole model file; DatasetError for a missing, unreadable or empty one.
+std::string read_model_file(const std::filesystem::path& path) {
   std::error_code error;
   if (!std::filesystem::exists(path, error)) {
     throw DatasetError(path, "model file not found");
@@ -47,6 +53,14 @@ Mesh load_mesh(const std::filesystem::path& path, const MeshLoadOptions& options
     if (file.bad() || !file.is_open()) throw DatasetError(path, "cannot read model file");
   }
   if (bytes.empty()) throw DatasetError(path, "model file is empty");
+  return bytes;
+}
+
+}  // namespace detail
+
+Mesh load_mesh(const std::filesystem::path& path, const MeshLoadOptions& options) {
+  detail::check_scale(options.scale_to_metres);
+  const std::string bytes = detail::read_model_file(path);
   const float scale = static_cast<float>(options.scale_to_metres);
 
   // PLY, the BOP format, is read by our own reader; OBJ and STL reach assimp only after the

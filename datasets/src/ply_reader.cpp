@@ -206,6 +206,8 @@ class PlyParser {
     format_ = header.format;
     position_ = header.body_offset;
   }
+  // bop_toolkit parses ASCII coordinates with Python's float(), i.e. as double.
+  void read_ascii_floats_as_double() { ascii_floats_as_double_ = true; }
   void set_record(const std::string& element, std::uint64_t index) {
     element_ = &element;
     record_ = index;
@@ -328,7 +330,7 @@ class PlyParser {
       }
       return static_cast<double>(value);
     }
-    if (type == Type::kFloat32) {
+    if (type == Type::kFloat32 && !ascii_floats_as_double_) {
       float value = 0;
       const auto [ptr, ec] = std::from_chars(first, last, value);
       if (ec == std::errc::result_out_of_range) return std::numeric_limits<double>::infinity();
@@ -352,6 +354,7 @@ class PlyParser {
   std::size_t position_ = 0;
   const std::string* element_ = nullptr;
   std::uint64_t record_ = 0;
+  bool ascii_floats_as_double_ = false;
 };
 
 int find_property(const Element& element, std::string_view name) {
@@ -702,6 +705,46 @@ Mesh build_mesh(const PlyRecords& records, Triangulation triangulation, float sc
 }
 
 }  // namespace
+
+Eigen::Matrix<double, 3, Eigen::Dynamic> read_ply_vertices(const std::filesystem::path& path,
+                                                           std::string_view bytes, double scale) {
+  PlyParser parser(path, bytes);
+  const Header header = parser.parse_header();
+  parser.check_counts(header);
+  const PlyLayout layout = locate_mesh_data(parser, header);
+  parser.read_ascii_floats_as_double();
+  parser.start_body(header);
+  const Element& vertex = *layout.vertex;
+  Eigen::Matrix<double, 3, Eigen::Dynamic> points;
+  for (const Element& element : header.elements) {
+    const bool is_vertex = &element == &vertex;
+    // Counts were checked against the body, so this allocation is bounded by the file size.
+    if (is_vertex) points.resize(3, static_cast<Eigen::Index>(element.count));
+    for (std::uint64_t r = 0; r < element.count; ++r) {
+      parser.set_record(element.name, r);
+      for (std::size_t p = 0; p < element.properties.size(); ++p) {
+        const Property& property = element.properties[p];
+        const int axis = !is_vertex                             ? -1
+                         : static_cast<int>(p) == layout.xyz[0] ? 0
+                         : static_cast<int>(p) == layout.xyz[1] ? 1
+                         : static_cast<int>(p) == layout.xyz[2] ? 2
+                                                                : -1;
+        if (axis < 0) {
+          parser.skip(property);
+          continue;
+        }
+        const double value = parser.scalar(property.type, property.name);
+        if (!std::isfinite(value)) {
+          parser.fail(parser.where() + "coordinate " + property.name + " is not finite (" +
+                      std::to_string(value) + ")");
+        }
+        points(axis, static_cast<Eigen::Index>(r)) = value * scale;
+      }
+    }
+    if (is_vertex) break;
+  }
+  return points;
+}
 
 Mesh read_ply(const std::filesystem::path& path, std::string_view bytes, float scale) {
   PlyParser parser(path, bytes);

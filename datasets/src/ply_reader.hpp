@@ -4,6 +4,7 @@
 
 #include <clutterscope/datasets/mesh.hpp>
 #include <filesystem>
+#include <string>
 #include <string_view>
 
 namespace clutterscope::datasets::detail {
@@ -30,5 +31,17 @@ inline constexpr std::size_t kPlyMaxHeaderBytes = 1 << 20;
 // are refused. Coordinates are multiplied by `scale` (in float, as after assimp). Every error
 // is a DatasetError naming `path` and the element, record and property.
 Mesh read_ply(const std::filesystem::path& path, std::string_view bytes, float scale);
+
+// std::invalid_argument unless MeshLoadOptions::scale_to_metres is positive and finite.
+void check_scale(double scale_to_metres);
+// The whole model file (load_mesh, load_model_vertices); DatasetError for a missing,
+// unreadable or empty one.
+std::string read_model_file(const std::filesystem::path& path);
+
+// The vertex element's x y z in file order as double, times `scale` (load_model_vertices):
+// ASCII numbers are parsed as double whatever their declared type, binary ones are exact.
+// Elements after the vertex element are not read.
+Eigen::Matrix<double, 3, Eigen::Dynamic> read_ply_vertices(const std::filesystem::path& path,
+                                                           std::string_view bytes, double scale);
 
 }  // namespace clutterscope::datasets::detail
