@@ -63,8 +63,9 @@ nlohmann::json no_depth_values_entry(const datasets::ImageKey& key,
 // image has no value > 0 (no depth at all); " + consequence.
 std::string no_depth_values_warning(const nlohmann::json& entry, const std::string& consequence);
 
-// Sums input_checks_of over the images of a batch, for summary.json: in item order, so
-// byte-stable across --jobs, resume and merge. With `depth_values_checked` (jobs that read the
+// Sums input_checks_of over the images of a batch, for summary.json, byte-stable across
+// --jobs, resume and merge: the sums do not depend on the order, the list is in item order
+// (the order the batch streams the items in). With `depth_values_checked` (jobs that read the
 // measured depth), also the images without depth values: their count and the first
 // kListedImages of them.
 class InputCheckTotals {
