@@ -64,8 +64,7 @@ DepthAgreement measure_depth_agreement(const cv::Mat& measured, const cv::Mat& r
       const int power = static_cast<int>(std::lround(std::log10(ratio)));
       if (power < -kMaxDepthPower || power > kMaxDepthPower) continue;
       if (std::abs(ratio / std::pow(10.0, power) - 1.0) > options.agree_tolerance) continue;
-      ratios[static_cast<std::size_t>(power + kMaxDepthPower)].push_back(
-          static_cast<float>(ratio));
+      ratios[static_cast<std::size_t>(power + kMaxDepthPower)].push_back(static_cast<float>(ratio));
     }
   }
   for (std::size_t i = 0; i < ratios.size(); ++i) {

@@ -26,16 +26,16 @@ namespace clutterscope::cli {
 namespace {
 
 namespace fs = std::filesystem;
+using clutterscope::testing::box_ply_text;
+using clutterscope::testing::json_row_major;
 using clutterscope::testing::occurrences;
 using clutterscope::testing::quoted;
 using clutterscope::testing::read_text;
 using clutterscope::testing::run_clutterscope;
 using clutterscope::testing::run_merged;
 using clutterscope::testing::ScratchDir;
-using clutterscope::testing::write_text;
-using clutterscope::testing::box_ply_text;
-using clutterscope::testing::json_row_major;
 using clutterscope::testing::shortest;
+using clutterscope::testing::write_text;
 
 const fs::path kTray6 = fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray6";
 const std::string kFast = " --particles 20 --iterations 2 --icp-samples 3 --quiet --no-time";
@@ -62,10 +62,10 @@ void write_plate_scene(const fs::path& root, const std::vector<Plate>& plates,
     const std::string id = clutterscope::testing::six_digit_id(plate.obj_id);
     write_text(root / "models" / ("obj_" + id + ".ply"), box_ply_text(size));
     info += std::string(info.size() > 1 ? ", " : "") + "\"" + std::to_string(plate.obj_id) +
-            "\": {\"diameter\": " + shortest(size.norm()) + ", \"min_x\": " +
-            shortest(-size.x() / 2) + ", \"min_y\": " + shortest(-size.y() / 2) +
-            ", \"min_z\": -5, \"size_x\": " + shortest(size.x()) + ", \"size_y\": " +
-            shortest(size.y()) + ", \"size_z\": 10}";
+            "\": {\"diameter\": " + shortest(size.norm()) +
+            ", \"min_x\": " + shortest(-size.x() / 2) + ", \"min_y\": " + shortest(-size.y() / 2) +
+            ", \"min_z\": -5, \"size_x\": " + shortest(size.x()) +
+            ", \"size_y\": " + shortest(size.y()) + ", \"size_z\": 10}";
   }
   write_text(root / "models" / "models_info.json", info + "}");
   cv::Mat depth(kPlateHeight, kPlateWidth, CV_16UC1);
@@ -88,16 +88,14 @@ void write_plate_scene(const fs::path& root, const std::vector<Plate>& plates,
   Eigen::Matrix3d K;
   K << kPlateF, 0, kPlateCx, 0, kPlateF, kPlateCy, 0, 0, 1;
   write_text(scene / "scene_camera.json", "{\"0\": {\"cam_K\": " + json_row_major(K) +
-                                              ", \"depth_scale\": " + shortest(depth_scale) +
-                                              "}}");
+                                              ", \"depth_scale\": " + shortest(depth_scale) + "}}");
   std::string gt;
   for (const Plate& plate : plates) {
     if (!plate.in_gt) continue;
     gt += std::string(gt.empty() ? "" : ", ") +
-          "{\"cam_R_m2c\": " + json_row_major(Eigen::Matrix3d::Identity()) +
-          ", \"cam_t_m2c\": [" + shortest(plate.t_mm.x()) + ", " + shortest(plate.t_mm.y()) +
-          ", " + shortest(plate.t_mm.z()) + "], \"obj_id\": " + std::to_string(plate.obj_id) +
-          "}";
+          "{\"cam_R_m2c\": " + json_row_major(Eigen::Matrix3d::Identity()) + ", \"cam_t_m2c\": [" +
+          shortest(plate.t_mm.x()) + ", " + shortest(plate.t_mm.y()) + ", " +
+          shortest(plate.t_mm.z()) + "], \"obj_id\": " + std::to_string(plate.obj_id) + "}";
   }
   write_text(scene / "scene_gt.json", "{\"0\": [" + gt + "]}");
 }
@@ -307,9 +305,9 @@ TEST_F(DepthChecksCli, ScalesOffByAPowerOfTenAreStillRefused) {
     const std::string from = "\"depth_scale\": 0.1";
     text.replace(text.find(from), from.size(), "\"depth_scale\": " + written);
     write_text(camera, text);
-    const auto refused = run_merged("visibility " + quoted(data()) +
-                                    " --scenes 0 --mode bop19 --quiet --out " +
-                                    quoted(out("scale_" + written)));
+    const auto refused =
+        run_merged("visibility " + quoted(data()) + " --scenes 0 --mode bop19 --quiet --out " +
+                   quoted(out("scale_" + written)));
     EXPECT_EQ(refused.exit_code, 3) << written << "\n" << refused.output;
     EXPECT_NE(refused.output.find("measured depth is " + ratio + "× the rendered GT depth"),
               std::string::npos)
@@ -324,8 +322,7 @@ TEST_F(DepthChecksCli, ScalesOffByAPowerOfTenAreStillRefused) {
     const auto estimate = run_merged("estimate " + quoted(data()) + " --scenes 0 --out " +
                                      quoted(out("scale_estimate_" + written)) + kFast);
     EXPECT_EQ(estimate.exit_code, 3) << written << "\n" << estimate.output;
-    EXPECT_NE(estimate.output.find("is depth_scale 0.1? (it is " + it_is + ")"),
-              std::string::npos)
+    EXPECT_NE(estimate.output.find("is depth_scale 0.1? (it is " + it_is + ")"), std::string::npos)
         << estimate.output;
   }
 
@@ -355,9 +352,9 @@ TEST_F(DepthChecksCli, DepthImageWithoutValuesIsNamed) {
   const fs::path depth = scene_dirs().front() / "depth" / "000000.png";
   const cv::Mat full = cv::imread(depth.string(), cv::IMREAD_UNCHANGED);
   ASSERT_TRUE(cv::imwrite(depth.string(), cv::Mat::zeros(full.size(), CV_16UC1)));
-  const auto run = run_clutterscope("visibility " + quoted(data()) +
-                                    " --scenes 0,1 --mode bop19 --quiet --out " +
-                                    quoted(out("zero")));
+  const auto run =
+      run_clutterscope("visibility " + quoted(data()) +
+                       " --scenes 0,1 --mode bop19 --quiet --out " + quoted(out("zero")));
   ASSERT_EQ(run.exit_code, 0) << run.errors;
   EXPECT_EQ(run.errors,
             "warning: test/000000/depth/000000.png: scene 0, image 0: the depth image has no "

@@ -99,9 +99,9 @@ TEST(DepthCheck, PixelsNearTheRendersDepthEdgesAreNotCompared) {
 
   DepthCheckOptions no_margin;
   no_margin.edge_margin_px = 0;  // only the outline itself is left out
-  EXPECT_EQ(measure_depth_agreement(measured_depth(800.0f, 1.0f), rendered, no_margin)
-                .compared_pixels,
-            58 * 38);
+  EXPECT_EQ(
+      measure_depth_agreement(measured_depth(800.0f, 1.0f), rendered, no_margin).compared_pixels,
+      58 * 38);
 }
 
 TEST(DepthCheck, PixelsWithoutDepthAreNotCompared) {
@@ -186,10 +186,10 @@ TEST(DepthCheck, TooFewComparedPixelsGiveNoVerdict) {
 }
 
 TEST(DepthCheck, LikelyScaleUndoesThePower) {
-  EXPECT_DOUBLE_EQ(likely_depth_scale(1, 1.0), 0.1);     // 1.0 written for 0.1
-  EXPECT_DOUBLE_EQ(likely_depth_scale(-1, 0.1), 1.0);    // 0.1 written for 1.0
-  EXPECT_DOUBLE_EQ(likely_depth_scale(3, 1.0), 1e-3);    // metres read as mm
-  EXPECT_DOUBLE_EQ(likely_depth_scale(-3, 1e-3), 1.0);   // mm read as metres
+  EXPECT_DOUBLE_EQ(likely_depth_scale(1, 1.0), 0.1);    // 1.0 written for 0.1
+  EXPECT_DOUBLE_EQ(likely_depth_scale(-1, 0.1), 1.0);   // 0.1 written for 1.0
+  EXPECT_DOUBLE_EQ(likely_depth_scale(3, 1.0), 1e-3);   // metres read as mm
+  EXPECT_DOUBLE_EQ(likely_depth_scale(-3, 1e-3), 1.0);  // mm read as metres
   EXPECT_DOUBLE_EQ(likely_depth_scale(2, 10.0), 0.1);
 }
 
