@@ -60,9 +60,11 @@ DepthAgreement measure_depth_agreement(const cv::Mat& measured, const cv::Mat& r
       if (!(m[u] > 0 && r[u] > 0) || distance[u] <= options.edge_margin_px) continue;
       ++result.compared_pixels;
       const double ratio = static_cast<double>(m[u]) / r[u];
-      // The only power this pixel can agree with is the one nearest to its ratio.
-      const int power = static_cast<int>(std::lround(std::log10(ratio)));
-      if (power < -kMaxDepthPower || power > kMaxDepthPower) continue;
+      // The only power this pixel can agree with is the one nearest to its ratio (checked
+      // in floating point first, so that no ratio overflows the int).
+      const double nearest = std::round(std::log10(ratio));
+      if (!(std::abs(nearest) <= kMaxDepthPower)) continue;
+      const int power = static_cast<int>(nearest);
       if (std::abs(ratio / std::pow(10.0, power) - 1.0) > options.agree_tolerance) continue;
       ratios[static_cast<std::size_t>(power + kMaxDepthPower)].push_back(static_cast<float>(ratio));
     }

@@ -113,6 +113,19 @@ TEST(DepthCheck, PixelsWithoutDepthAreNotCompared) {
   EXPECT_EQ(agreement.agreeing_at(1), 52 * 16);
 }
 
+TEST(DepthCheck, RatiosBeyondTheLargestPowerAgreeWithNone) {
+  cv::Mat rendered = rendered_depth(800.0f);
+  rendered(kObject).setTo(1e-40f);  // a denormal depth: measured / rendered is 8e72
+  const DepthAgreement agreement =
+      measure_depth_agreement(measured_depth(800.0f, 1e30f), rendered, {});
+  EXPECT_EQ(agreement.compared_pixels, kCompared);
+  for (int power = -kMaxDepthPower; power <= kMaxDepthPower; ++power)
+    EXPECT_EQ(agreement.agreeing_at(power), 0) << power;
+  const DepthAgreement ten_thousand =
+      measure_depth_agreement(measured_depth(800.0f, 1e4f), rendered_depth(800.0f), {});
+  EXPECT_EQ(ten_thousand.agreeing_at(kMaxDepthPower), 0);
+}
+
 TEST(DepthCheck, LargeImagesAreSampledOnAnEvenGrid) {
   DepthCheckOptions options;
   options.max_samples = 1200;  // 4800 pixels: stride 2 in u and v
