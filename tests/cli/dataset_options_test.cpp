@@ -116,6 +116,48 @@ TEST(DatasetOptions, InputCheckTotalsDoNotDependOnOrder) {
   EXPECT_EQ(forward.to_json()["max_rotation_orthonormality_error"], 0.0131);
 }
 
+// Images without depth values: counted, the first kListedImages named in item order (the
+// order the batch streams them in, so the list is the same for any --jobs, resume or merge);
+// reported only by jobs that read the measured depth.
+TEST(DatasetOptions, InputCheckTotalsNameImagesWithoutDepthValues) {
+  batch::InputCheckTotals totals(/*depth_values_checked=*/true), unchecked;
+  for (int im_id = 0; im_id < 150; ++im_id) {
+    nlohmann::json image = {{"rotations_off", 0}, {"max_rotation_error", 0.0}};
+    if (im_id % 3 == 0) {
+      image[batch::kNoDepthValuesKey] = batch::no_depth_values_entry(
+          {"test", 2, im_id}, fs::path("/data/ds/test/000002/depth") / "x.png", "/data/ds");
+    }
+    totals.add(image);
+    unchecked.add(image);
+  }
+  const nlohmann::json json = totals.to_json();
+  EXPECT_EQ(json.at("images_without_depth_values"), 50);
+  ASSERT_EQ(json.at("images_without_depth_values_listed").size(), 50u);
+  EXPECT_EQ(json.at("images_without_depth_values_listed").at(1),
+            nlohmann::json::parse(R"({"split": "test", "scene_id": 2, "im_id": 3,
+                                      "depth_file": "test/000002/depth/x.png"})"));
+  EXPECT_FALSE(unchecked.to_json().contains("images_without_depth_values"));
+
+  for (int more = 0; more < 60; ++more) {
+    nlohmann::json image = {{"rotations_off", 0}, {"max_rotation_error", 0.0}};
+    image[batch::kNoDepthValuesKey] =
+        batch::no_depth_values_entry({"test", 3, more}, "/elsewhere/d.png", "/data/ds");
+    totals.add(image);
+  }
+  EXPECT_EQ(totals.to_json().at("images_without_depth_values"), 110);
+  EXPECT_EQ(totals.to_json().at("images_without_depth_values_listed").size(),
+            batch::InputCheckTotals::kListedImages);
+  // A file outside the dataset keeps its full path.
+  EXPECT_EQ(totals.to_json().at("images_without_depth_values_listed").at(50).at("depth_file"),
+            "/elsewhere/d.png");
+  EXPECT_EQ(batch::no_depth_values_warning(
+                batch::no_depth_values_entry({"test", 3, 7}, "/data/ds/test/000003/depth/7.png",
+                                             "/data/ds"),
+                "so what"),
+            "warning: test/000003/depth/7.png: scene 3, image 7: the depth image has no value > 0 "
+            "(no depth at all); so what");
+}
+
 TEST(DatasetOptions, InputChecksOfAViewCountRotationsOffOrthonormal) {
   datasets::SceneView view;
   view.objects.resize(3);

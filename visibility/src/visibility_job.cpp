@@ -154,6 +154,11 @@ class VisibilityWorker {
       measured_mm = load_bop_depth_mm(depth_path.string(), depth_scale, view.camera.width,
                                       view.camera.height, where);
     }
+    nlohmann::json input_checks = batch::input_checks_of(view);
+    if (options_.is_bop() && cv::countNonZero(measured_mm) == 0) {
+      input_checks[batch::kNoDepthValuesKey] =
+          batch::no_depth_values_entry(key, depth_path, dataset_.root());
+    }
     std::vector<std::string> labels;
     for (const datasets::GtInstance& object : view.objects) {
       labels.push_back(dataset_.model(object.obj_id).label);
@@ -224,7 +229,7 @@ class VisibilityWorker {
         {"objects", objects},
         {"scene_visibility", result.scene_visibility ? nlohmann::json(*result.scene_visibility)
                                                      : nlohmann::json(nullptr)},
-        {"input_checks", batch::input_checks_of(view)}};
+        {"input_checks", input_checks}};
     if (view.target_gt) output.summary["targets"] = *view.target_gt;
     if (job_.masks) write_masks(key, masks, &output);
     if (job_.overlays) write_overlay(key, view, masks, labels, result, measured_mm, &output);
@@ -375,7 +380,10 @@ class Distribution {
 class VisibilitySummary : public batch::SummaryBuilder {
  public:
   VisibilitySummary(nlohmann::json fingerprint, fs::path out_dir)
-      : fingerprint_(std::move(fingerprint)), out_dir_(std::move(out_dir)) {
+      : fingerprint_(std::move(fingerprint)),
+        out_dir_(std::move(out_dir)),
+        // The BOP modes read the measured depth: only they can tell an image without depth.
+        input_checks_(fingerprint_.value("mode", "rendered") != "rendered") {
     write_bop_info_ = fingerprint_.value("write_bop_info", false);
   }
 
@@ -390,7 +398,21 @@ class VisibilitySummary : public batch::SummaryBuilder {
     const nlohmann::json& objects = record.summary.at("objects");
     ++images_;
     if (objects.empty()) ++images_without_objects_;
-    input_checks_.add(record.summary.at("input_checks"));
+    const nlohmann::json& checks = record.summary.at("input_checks");
+    input_checks_.add(checks);
+    if (checks.contains(batch::kNoDepthValuesKey)) {
+      // Here, in item order, so that every run (resumed, merged) names each such image once.
+      std::fprintf(stderr, "%s\n",
+                   batch::no_depth_values_warning(
+                       checks.at(batch::kNoDepthValuesKey),
+                       fingerprint_.value("mode", "") == "bop18"
+                           ? "bop18 counts no pixel without depth as visible: every object of "
+                             "the image gets visib_fract 0"
+                           : "bop19 counts every pixel without depth as visible (bop_toolkit's "
+                             "rule): no object of the image is occluded (visib_fract 1.0 where "
+                             "it lies inside the image)")
+                       .c_str());
+    }
     std::vector<BopGtInfo> infos;
     for (const nlohmann::json& object : objects) infos.push_back(info_from_json(object));
     if (record.summary.contains("targets")) {

@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <atomic>
 #include <clutterscope/batch/dataset_selection.hpp>
+#include <clutterscope/datasets/errors.hpp>
 #include <iostream>
 #include <thread>
 
@@ -120,18 +121,52 @@ nlohmann::json input_checks_of(const datasets::SceneView& view) {
   return {{"rotations_off", off}, {"max_rotation_error", worst}};
 }
 
+nlohmann::json no_depth_values_entry(const datasets::ImageKey& key, const fs::path& depth_file,
+                                     const fs::path& dataset_root) {
+  const fs::path relative = depth_file.lexically_relative(dataset_root);
+  const bool inside = !relative.empty() && *relative.begin() != "..";
+  return {{"split", key.split},
+          {"scene_id", key.scene_id},
+          {"im_id", key.im_id},
+          {"depth_file", (inside ? relative : depth_file).generic_string()}};
+}
+
+std::string no_depth_values_warning(const nlohmann::json& entry, const std::string& consequence) {
+  return "warning: " + entry.at("depth_file").get<std::string>() + ": " +
+         datasets::location(entry.at("scene_id").get<int>(), entry.at("im_id").get<int>()) +
+         "the depth image has no value > 0 (no depth at all); " + consequence;
+}
+
 void InputCheckTotals::add(const nlohmann::json& image_checks) {
   rotations_off_orthonormal_ += image_checks.at("rotations_off").get<std::int64_t>();
   max_rotation_error_ =
       std::max(max_rotation_error_, image_checks.at("max_rotation_error").get<double>());
+  const auto no_depth = image_checks.find(kNoDepthValuesKey);
+  if (no_depth == image_checks.end()) return;
+  ++images_without_depth_values_;
+  if (listed_without_depth_values_.size() < kListedImages) {
+    listed_without_depth_values_.push_back(*no_depth);
+  }
 }
 
 nlohmann::json InputCheckTotals::to_json() const {
-  return {{"rotations_off_orthonormal_1e-6", rotations_off_orthonormal_},
-          {"max_rotation_orthonormality_error", max_rotation_error_},
-          {"note",
-           "GT rotations (cam_R_m2c) are used as stored, as bop_toolkit does; accepted up to "
-           "|R^T R - I| = 0.02, refused beyond"}};
+  nlohmann::json json = {
+      {"rotations_off_orthonormal_1e-6", rotations_off_orthonormal_},
+      {"max_rotation_orthonormality_error", max_rotation_error_},
+      {"note",
+       "GT rotations (cam_R_m2c) are used as stored, as bop_toolkit does; accepted up to "
+       "|R^T R - I| = 0.02, refused beyond"}};
+  if (depth_values_checked_) {
+    json["images_without_depth_values"] = images_without_depth_values_;
+    json["images_without_depth_values_listed"] = listed_without_depth_values_;
+    json["depth_values_note"] =
+        "images whose depth PNG has no value > 0, in item order (the first " +
+        std::to_string(kListedImages) +
+        " listed, each named on stderr): every pixel lacks depth, so bop19 counts every object "
+        "pixel as visible (bop_toolkit's rule: visib_fract 1.0 where the object lies inside the "
+        "image) and bop18 none (0.0)";
+  }
+  return json;
 }
 
 nlohmann::json dataset_fingerprint(const DatasetOptions& options) {

@@ -24,9 +24,9 @@ void add_depth_check_options(CLI::App& command, datasets::DepthCheckOptions* opt
           "", ""));
   command.add_flag_callback(
       "--no-depth-check", [options] { options->check = false; },
-      "do not compare the measured depth with the rendered GT depth (by default an image whose "
-      "median ratio measured / rendered is outside [0.8, 1.25] is refused as a wrong "
-      "depth_scale)");
+      "do not compare the measured depth with the rendered GT depth (by default an image is "
+      "refused as a wrong depth_scale when its depth agrees with the GT render times a power of "
+      "ten other than 1 on clearly more pixels than with the render itself)");
 }
 
 }  // namespace clutterscope::cli

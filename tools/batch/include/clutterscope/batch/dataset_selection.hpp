@@ -9,6 +9,7 @@
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/depth_check.hpp>
 #include <cstdint>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -50,16 +51,37 @@ datasets::BopDataset open_dataset(const DatasetOptions& options);
 // further than kRotationReportThreshold from orthonormal, and the largest error.
 nlohmann::json input_checks_of(const datasets::SceneView& view);
 
-// Sums input_checks_of over the images of a batch, for summary.json: order-independent, so
-// byte-stable across --jobs, resume and merge.
+// The entry a job adds to an image's input_checks when its measured depth image has no value
+// > 0 (a camera that gave no depth, a placeholder file): {"split", "scene_id", "im_id",
+// "depth_file"} under kNoDepthValuesKey, the file relative to the dataset root when inside it.
+inline constexpr const char* kNoDepthValuesKey = "depth_without_values";
+nlohmann::json no_depth_values_entry(const datasets::ImageKey& key,
+                                     const std::filesystem::path& depth_file,
+                                     const std::filesystem::path& dataset_root);
+
+// The warning line (no newline) for such an entry: "warning: FILE: scene S, image I: the depth
+// image has no value > 0 (no depth at all); " + consequence.
+std::string no_depth_values_warning(const nlohmann::json& entry, const std::string& consequence);
+
+// Sums input_checks_of over the images of a batch, for summary.json, byte-stable across
+// --jobs, resume and merge: the sums do not depend on the order, the list is in item order
+// (the order the batch streams the items in). With `depth_values_checked` (jobs that read the
+// measured depth), also the images without depth values: their count and the first
+// kListedImages of them.
 class InputCheckTotals {
  public:
+  static constexpr std::size_t kListedImages = 100;
+  explicit InputCheckTotals(bool depth_values_checked = false)
+      : depth_values_checked_(depth_values_checked) {}
   void add(const nlohmann::json& image_checks);
   nlohmann::json to_json() const;
 
  private:
   std::int64_t rotations_off_orthonormal_ = 0;
   double max_rotation_error_ = 0.0;
+  bool depth_values_checked_ = false;
+  std::int64_t images_without_depth_values_ = 0;
+  nlohmann::json listed_without_depth_values_ = nlohmann::json::array();
 };
 
 // One line on stderr, once per process, when `jobs` exceeds the machine's cores (the run goes
