@@ -291,7 +291,7 @@ TEST_F(ReportHtml, ThresholdsOnAFolderWithoutEstimatesSaysWhatToRun) {
   // A visibility objects.csv has no estimate columns.
   std::string header_only = format_objects_csv(visibility_only);
   header_only = header_only.substr(0, header_only.find(",x_mm")) + "\n" +
-                "test,1,0,0,1,obj 1,1000,1000,500,0.5,10,20,30,40,12,20,28,40\n";
+                "test,1,0,0,1,obj 1,1000,1000,500,0.5,10,20,30,40,12,20,28,40,1\n";
   testing::write_text(dir_ / "objects.csv", header_only);
   try {
     load_report_objects(dir_);

@@ -195,7 +195,7 @@ TEST_F(ReportTables, InViewColumnIsRead) {
 TEST(ReportAnalysisOutOfView, IsCountedAndLeftOutOfEveryFigure) {
   const std::vector<ObjectRow> rows = testing::synthetic_dataset(4);
   ReportOptions options;
-  options.bootstrap.resamples = 50;
+  options.bootstrap.resamples = 100;
   const ReportAnalysis without = analyse_report(rows, {}, options);
   std::vector<ObjectRow> with = rows;
   ObjectRow outside = rows.front();
