@@ -42,7 +42,7 @@ std::string model_info_mismatch(const Eigen::AlignedBox3d& mesh_box, const Model
           << vector_text(mesh_box.sizes()) << " in its file's units) does not fit obj_id "
           << model.obj_id << " of models_info.json (min " << vector_text(info.min()) << ", size "
           << vector_text(info.sizes()) << ", diameter " << diameter << " mm; tolerance "
-          << tolerance << ", " << 100 * kModelInfoTolerance << "% of the mesh's diagonal)";
+          << tolerance << " mm, " << 100 * kModelInfoTolerance << "% of the mesh's diagonal)";
   struct Unit {
     double factor;
     const char* name;
