@@ -218,6 +218,22 @@ TEST_F(InputChecksCli, AModelsInfoBoxThatDoesNotEncloseTheMeshIsRefused) {
                                "no unit scale makes them agree"});
 }
 
+TEST_F(InputChecksCli, ModelsInfoWithinOnePercentOfTheMeshDiagonalIsAccepted) {
+  // obj 2 is the 50 mm cube, diagonal 86.6 mm: tolerance 0.87 mm. 0.8 mm off is rounding,
+  // 1 mm off is refused.
+  const fs::path root = dataset();
+  const fs::path info = root / "models" / "models_info.json";
+  replace_first(info, "\"min_x\": -25", "\"min_x\": -25.8");
+  replace_first(info, "\"size_x\": 50", "\"size_x\": 50.8");
+  const CommandRun rounded = visibility();
+  EXPECT_EQ(rounded.exit_code, 0) << rounded.errors;
+  replace_first(info, "\"min_x\": -25.8", "\"min_x\": -26");
+  replace_first(info, "\"size_x\": 50.8", "\"size_x\": 51");
+  const CommandRun off = visibility();
+  EXPECT_EQ(off.exit_code, 3) << off.errors;
+  expect_mentions(off.errors, {"obj_000002.ply", "does not fit obj_id 2", "tolerance 0.866025 mm"});
+}
+
 // --- E: undefined values written and read back as undefined -------------------------------
 
 TEST_F(InputChecksCli, ReportOnAnImageWithNoObjectInView) {
