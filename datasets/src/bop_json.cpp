@@ -5,6 +5,8 @@
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <tuple>
+#include <utility>
 
 namespace clutterscope::datasets {
 
@@ -226,6 +228,31 @@ Eigen::Matrix3d rotation(const Json& value, const char* field, const FieldContex
 Eigen::Vector3d vector3(const Json& value, const char* field, const FieldContext& context) {
   const std::vector<double> numbers = finite_numbers(value, field, 3, context);
   return Eigen::Vector3d(numbers[0], numbers[1], numbers[2]);
+}
+
+void check_intrinsics(double fx, double fy, double cx, double cy, int width, int height,
+                      const char* field, const FieldContext& context) {
+  const auto text = [](double value) {
+    std::ostringstream out;
+    out << value;
+    return out.str();
+  };
+  for (const auto& [name, focal] : {std::pair<const char*, double>{"fx", fx}, {"fy", fy}}) {
+    if (!(focal >= kMinFocalLengthPx && focal <= kMaxFocalLengthPx)) {
+      context.fail(std::string(field) + " " + name + " = " + text(focal) +
+                   " px is outside the accepted " + text(kMinFocalLengthPx) + " to " +
+                   text(kMaxFocalLengthPx) + " px (a focal length in pixels)");
+    }
+  }
+  for (const auto& [name, centre, size] :
+       {std::tuple<const char*, double, int>{"cx", cx, width}, {"cy", cy, height}}) {
+    if (!(centre >= -size && centre <= 2.0 * size)) {
+      context.fail(std::string(field) + " " + name + " = " + text(centre) +
+                   " px is off the image by more than its size (accepted: -" +
+                   std::to_string(size) + " to " + std::to_string(2 * size) + " px for " +
+                   (name[1] == 'x' ? "width " : "height ") + std::to_string(size) + ")");
+    }
+  }
 }
 
 int key_as_id(const std::string& key, const char* what, const FieldContext& context) {

@@ -52,6 +52,19 @@ Eigen::Matrix3d rotation(const Json& value, const char* field, const FieldContex
                          double tolerance = kRotationOrthonormalityTolerance);
 Eigen::Vector3d vector3(const Json& value, const char* field, const FieldContext& context);
 
+// Intrinsics the reader accepts (scene_camera.json cam_K, camera.json fx/fy/cx/cy), in pixels.
+// A focal length below 1 px puts a 640 px image across 179.8 degrees: no pinhole camera, and
+// fx = 1e-300 collapses every object to a point. Above 1e6 px a 4096 px image spans 0.23
+// degrees; BOP's cameras have 500-4000 px. The principal point must lie on the 3W x 3H canvas
+// centred on the image that visibility renders on: cx in [-W, 2W], cy in [-H, 2H].
+constexpr double kMinFocalLengthPx = 1.0;
+constexpr double kMaxFocalLengthPx = 1e6;
+
+// Refuses intrinsics outside kMinFocalLengthPx..kMaxFocalLengthPx (fx, fy) or a principal
+// point off the 3W x 3H canvas, naming `field` ("cam_K", "camera.json") and the value.
+void check_intrinsics(double fx, double fy, double cx, double cy, int width, int height,
+                      const char* field, const FieldContext& context);
+
 // Parses an object key as an integer id ("12" -> 12); DatasetError otherwise.
 int key_as_id(const std::string& key, const char* what, const FieldContext& context);
 

@@ -206,6 +206,16 @@ BopDataset BopDataset::open(const fs::path& root, const BopOpenOptions& options)
     if (root_camera.width <= 0 || root_camera.height <= 0) {
       context.fail("width and height must be positive");
     }
+    // BOP's camera.json also gives the intrinsics; cam_K of scene_camera.json is what is used,
+    // but a camera.json with degenerate ones is refused as well, not trusted elsewhere.
+    if (camera.contains("fx") || camera.contains("fy") || camera.contains("cx") ||
+        camera.contains("cy")) {
+      const auto number = [&](const char* field) {
+        return detail::finite_number(detail::require_field(camera, field, context), field, context);
+      };
+      detail::check_intrinsics(number("fx"), number("fy"), number("cx"), number("cy"),
+                               root_camera.width, root_camera.height, "camera.json", context);
+    }
     const auto scale = camera.find("depth_scale");
     if (scale != camera.end()) {
       root_camera.depth_scale = detail::finite_number(*scale, "depth_scale", context);

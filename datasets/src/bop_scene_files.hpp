@@ -3,6 +3,7 @@
 // Private: what the BOP reader keeps of a scene (BopDataset::SceneFiles, its cache) and the
 // helpers that bop_reader.cpp and bop_scene_reader.cpp share.
 
+#include <Eigen/Geometry>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <filesystem>
@@ -44,6 +45,19 @@ void require_object(const Json& json, const std::filesystem::path& path, const s
 // The object's keys as ids (detail::key_as_id), sorted.
 std::vector<int> sorted_ids(const Json& object, const std::filesystem::path& path,
                             const std::string& where, const char* what);
+
+// Relative tolerance of model_info_mismatch: 1% of the mesh's bounding-box diagonal. BOP's
+// models_info.json is computed from the mesh's own vertices (bop_toolkit calc_model_info.py),
+// so the two agree to the files' rounding; a unit error is off by a factor of 10 or more.
+constexpr double kModelInfoTolerance = 0.01;
+
+// Why a mesh does not fit its models_info.json entry, empty when it does. `mesh_box` is the
+// mesh's bounding box in the file's units, which BOP fixes to millimetres: each face of the
+// models_info box (min_x .. min_x + size_x, ...) must be within kModelInfoTolerance x the
+// mesh's diagonal of the mesh's, and the diameter between the mesh's largest extent and its
+// diagonal (the farthest two vertices lie in between) within the same tolerance. When the mesh
+// scaled by 1000, 100, 10, 0.1, 0.01 or 0.001 fits, the message says which unit that is.
+std::string model_info_mismatch(const Eigen::AlignedBox3d& mesh_box, const ModelInfo& model);
 
 }  // namespace detail
 

@@ -1,5 +1,8 @@
+#include <algorithm>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/datasets/mesh.hpp>
+#include <iterator>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -80,9 +83,13 @@ Camera parse_camera(const Json& entry, double default_depth_scale, const FieldCo
   Camera camera;
   camera.K =
       detail::row_major_matrix(detail::require_field(entry, "cam_K", context), "cam_K", context);
-  if (camera.fx() <= 0 || camera.fy() <= 0) context.fail("cam_K must have positive fx and fy");
   if ((camera.K.row(2) - Eigen::RowVector3d(0, 0, 1)).cwiseAbs().maxCoeff() > 1e-9) {
     context.fail("cam_K's last row must be [0, 0, 1]");
+  }
+  // The renderers model no skew: a skewed K would be drawn as if it had none.
+  if (camera.K(1, 0) != 0 || camera.K(0, 1) != 0) {
+    context.fail("cam_K must be [fx, 0, cx, 0, fy, cy, 0, 0, 1] (no skew), got K[0][1] = " +
+                 std::to_string(camera.K(0, 1)) + ", K[1][0] = " + std::to_string(camera.K(1, 0)));
   }
   camera.depth_scale = default_depth_scale;
   const auto scale = entry.find("depth_scale");
@@ -135,6 +142,46 @@ std::vector<GtInstance> parse_instances(const Json& entry, const BopDataset& dat
   return instances;
 }
 
+// "4, 7, 9 and 12 more": the first few ids of a list, for messages.
+std::string some_ids(const std::vector<int>& ids) {
+  constexpr std::size_t kShown = 5;
+  std::string text;
+  for (std::size_t i = 0; i < ids.size() && i < kShown; ++i) {
+    text += (i ? ", " : "") + std::to_string(ids[i]);
+  }
+  if (ids.size() > kShown) text += " and " + std::to_string(ids.size() - kShown) + " more";
+  return text;
+}
+
+// scene_camera.json and scene_gt.json must list the same images. bop_toolkit writes both for
+// every image (an image without annotated objects has "ID": [] in scene_gt.json), and its
+// scripts look up one file by the other's keys: an image missing from either is a broken
+// scene, not an image to skip (skipped, it vanishes from every count without a word).
+void check_same_images(const std::vector<int>& camera_ids, const std::vector<int>& gt_ids,
+                       const fs::path& camera_path, const fs::path& gt_path,
+                       const std::string& where) {
+  std::vector<int> gt_only, camera_only;
+  std::set_difference(gt_ids.begin(), gt_ids.end(), camera_ids.begin(), camera_ids.end(),
+                      std::back_inserter(gt_only));
+  std::set_difference(camera_ids.begin(), camera_ids.end(), gt_ids.begin(), gt_ids.end(),
+                      std::back_inserter(camera_only));
+  if (gt_only.empty() && camera_only.empty()) return;
+  std::string message = where + "scene_gt.json and " + camera_path.filename().string() + " (" +
+                        camera_path.string() + ") list different images:";
+  if (!gt_only.empty()) {
+    message += " " + std::to_string(gt_only.size()) +
+               " image(s) in scene_gt.json are missing from scene_camera.json (im_id " +
+               some_ids(gt_only) + ")";
+  }
+  if (!camera_only.empty()) {
+    message += std::string(gt_only.empty() ? " " : "; ") + std::to_string(camera_only.size()) +
+               " image(s) in scene_camera.json are missing from scene_gt.json (im_id " +
+               some_ids(camera_only) + "; an image without annotated objects is listed with " +
+               "an empty list, \"ID\": [])";
+  }
+  throw DatasetError(gt_path, message);
+}
+
 // The JSON files of one scene (scene_graph.json is optional).
 struct SceneJson {
   const fs::path& dir;
@@ -163,6 +210,9 @@ ImageRecord parse_image(const SceneJson& scene, const BopDataset& dataset, int s
     }
     record.camera.width = image_size->width;
     record.camera.height = image_size->height;
+    detail::check_intrinsics(record.camera.fx(), record.camera.fy(), record.camera.cx(),
+                             record.camera.cy(), record.camera.width, record.camera.height, "cam_K",
+                             FieldContext{scene.camera_path, image_where});
     const auto gt_entry = scene.gt.find(key);
     if (gt_entry == scene.gt.end()) {
       throw DatasetError(scene.gt_path, image_where + "image has no entry in scene_gt.json");
@@ -226,6 +276,7 @@ std::shared_ptr<const BopDataset::SceneFiles> BopDataset::scene(const std::strin
   }
 
   const std::vector<int> ids = sorted_ids(camera_json, camera_path, where, "image");
+  check_same_images(ids, sorted_ids(gt_json, gt_path, where, "image"), camera_path, gt_path, where);
   // The camera's size: camera.json, else the scene's first rgb/gray image, else its first
   // depth image. A depth image of another size is refused when loaded (never rescaled).
   std::optional<cv::Size> image_size;
@@ -276,6 +327,14 @@ void BopDataset::check_model_file(const ModelInfo& model, const fs::path& scene_
   }
   if (fs::file_size(model.mesh_path, error) == 0 || error) {
     throw DatasetError(model.mesh_path, what + " is empty" + referenced);
+  }
+  // A mesh and models_info.json in different units would be drawn 1000x too small or large,
+  // or with a box that does not enclose it: both give numbers that are silently wrong.
+  const Mesh mesh = load_mesh(model.mesh_path, MeshLoadOptions{1.0});
+  const std::string mismatch = detail::model_info_mismatch(mesh.bounds().cast<double>(), model);
+  if (!mismatch.empty()) {
+    throw DatasetError(model.mesh_path, what + ": " + mismatch + " (" + models_info_path_.string() +
+                                            ")" + referenced);
   }
   std::lock_guard<std::mutex> lock(cache_->mutex);
   cache_->checked_models.insert(model.obj_id);

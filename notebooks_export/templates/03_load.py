@@ -41,6 +41,13 @@ for column in NUMERIC_COLUMNS:
             [np.inf, -np.inf], np.nan)
 if "label" in objects.columns:
     objects["label"] = objects["label"].fillna("").astype(str)
+# An object out of view (in_view 0: no pixel of its silhouette in the image) is neither hidden
+# nor visible; as in the report, every figure is over the objects in view.
+out_of_view = 0
+if "in_view" in objects.columns:
+    in_view = as_bool(objects["in_view"]).fillna(True).astype(bool)
+    out_of_view = int((~in_view).sum())
+    objects = objects[in_view].reset_index(drop=True)
 
 has_estimates = all(column in objects.columns for column in VARIANCE_COLUMNS)
 # The threshold applies to the largest axis variance: "largest <= T" means "every axis <= T".
@@ -73,7 +80,7 @@ if not isinstance(summary, dict):
 
 print(f"{len(objects)} objects in {len(images)} images; {int(objects['estimated'].sum())} with an "
       f"estimate, {int((objects['estimated'] & objects['err_cm'].notna()).sum())} of them with a "
-      f"measured error")
+      f"measured error" + (f"; {out_of_view} out of view, not analysed" if out_of_view else ""))
 if not has_estimates:
     print("objects.csv has no estimate columns (a visibility-only folder): run "
           "`clutterscope report DATASET --out DIR` for the variance and threshold sections")

@@ -10,7 +10,7 @@ TEST(TableLayouts, HeadersAsWritten) {
   EXPECT_EQ(visibility_objects_table().header(),
             "split,scene_id,im_id,gt_id,obj_id,label,px_count_all,px_count_valid,"
             "px_count_visib,visib_fract,bbox_obj_x,bbox_obj_y,bbox_obj_w,bbox_obj_h,"
-            "bbox_visib_x,bbox_visib_y,bbox_visib_w,bbox_visib_h");
+            "bbox_visib_x,bbox_visib_y,bbox_visib_w,bbox_visib_h,in_view");
   EXPECT_EQ(visibility_images_table().header(), "split,scene_id,im_id,n_objects,scene_visibility");
   EXPECT_EQ(estimates_table().header(),
             "split,scene_id,im_id,gt_id,obj_id,label,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,"

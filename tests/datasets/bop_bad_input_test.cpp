@@ -332,10 +332,13 @@ TEST_F(BopBadInput, UnknownImage) {
                   {"scene_camera.json", "scene 1: unknown image 9"});
 }
 
+// The scene files must list the same images: neither is skipped silently.
 TEST_F(BopBadInput, ImageWithoutGroundTruth) {
   replace_first(scene_file("scene_gt.json"), "\"1\":", "\"5\":");
   expect_mentions(load_error({"test", 1, 1}),
-                  {"scene_gt.json", "scene 1, image 1: image has no entry"});
+                  {"scene_gt.json", "scene_camera.json",
+                   "scene 1: ", "in scene_gt.json are missing from scene_camera.json (im_id 5)",
+                   "in scene_camera.json are missing from scene_gt.json (im_id 1;"});
 }
 
 TEST_F(BopBadInput, ImageKeyThatIsNotAnId) {

@@ -176,7 +176,8 @@ TEST(BopReader, WorldToCameraIsReadInMetres) {
   // Camera 1 m above the world origin looking straight down: R_w2c = diag(1, -1, -1).
   write_text(dir.path() / "test" / "000001" / "scene_camera.json",
              "{\"0\": {\"cam_K\": [60, 0, 31.5, 0, 62, 23.5, 0, 0, 1], \"cam_R_w2c\": [1, 0, 0, 0, "
-             "-1, 0, 0, 0, -1], \"cam_t_w2c\": [0, 0, 1000], \"depth_scale\": 0.1}}");
+             "-1, 0, 0, 0, -1], \"cam_t_w2c\": [0, 0, 1000], \"depth_scale\": 0.1}, "
+             "\"1\": {\"cam_K\": [60, 0, 31.5, 0, 62, 23.5, 0, 0, 1]}}");
   const BopDataset dataset = BopDataset::open(dir.path());
   const SceneView view = dataset.load({"test", 1, 0});
   ASSERT_TRUE(view.camera.world_to_camera.has_value());

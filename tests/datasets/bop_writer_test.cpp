@@ -32,7 +32,9 @@ Eigen::Isometry3d random_pose(std::mt19937_64& rng) {
 BopWriter::ImageData random_image(int im_id, std::mt19937_64& rng) {
   BopWriter::ImageData image;
   image.im_id = im_id;
-  image.camera.K << 572.4114, 0, 325.2611, 0, 573.57043, 242.04899, 0, 0, 1;
+  // LM's focal lengths; the principal point of a 40 x 30 image (the reader refuses one off it
+  // by more than the image size).
+  image.camera.K << 572.4114, 0, 20.2611, 0, 573.57043, 15.04899, 0, 0, 1;
   image.camera.width = 40;
   image.camera.height = 30;
   image.camera.depth_scale = 0.1;

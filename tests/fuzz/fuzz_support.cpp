@@ -51,6 +51,20 @@ std::string base_models_info() {
   return text + "}";
 }
 
+// The 100 mm cube centred on the origin that base_models_info() describes.
+std::string box_ply_100mm() {
+  std::string text =
+      "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 12\nproperty list uchar int vertex_indices\nend_header\n";
+  for (int i = 0; i < 8; ++i) {
+    text += std::string((i & 1) ? "50" : "-50") + ((i & 2) ? " 50" : " -50") +
+            ((i & 4) ? " 50\n" : " -50\n");
+  }
+  return text +
+         "3 0 2 3\n3 0 3 1\n3 4 5 7\n3 4 7 6\n3 0 1 5\n3 0 5 4\n"
+         "3 2 6 7\n3 2 7 3\n3 0 4 6\n3 0 6 2\n3 1 3 7\n3 1 7 5\n";
+}
+
 std::string base_scene_gt() {
   std::string text = "{\n  \"0\": [";
   for (int k = 0; k < 10; ++k) {
@@ -75,7 +89,7 @@ const fs::path& base_dataset() {
     for (int id = 1; id <= 16; ++id) {
       char file[32];
       std::snprintf(file, sizeof(file), "obj_%06d.ply", id);
-      write_text(models / file, "ply\n");  // only checked to exist and be non-empty
+      write_text(models / file, box_ply_100mm());  // load() checks it against models_info
       names += std::string(id > 1 ? ", " : "") + "\"" + std::to_string(id) + "\": \"object " +
                std::to_string(id) + "\"";
     }

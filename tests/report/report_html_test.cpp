@@ -61,10 +61,11 @@ TEST_F(ReportHtml, AnalysisOfSyntheticDatasetFindsNegativeCorrelation) {
     visible += row.px_count_visib;
     valid += row.px_count_valid;
   }
-  EXPECT_DOUBLE_EQ(analysis.images[3].scene_visibility, visible / valid);
+  ASSERT_TRUE(analysis.images[3].scene_visibility);
+  EXPECT_DOUBLE_EQ(*analysis.images[3].scene_visibility, visible / valid);
   // ... and the visibility command's value where it has one.
   const ReportAnalysis with_images = analyse_report(rows, {{"test", 1, 3, 9, 0.125}}, options);
-  EXPECT_EQ(with_images.images[3].scene_visibility, 0.125);
+  EXPECT_EQ(with_images.images[3].scene_visibility, std::optional<double>(0.125));
   const std::string console = format_console_summary(analysis);
   EXPECT_EQ(std::count(console.begin(), console.end(), '\n'), 5) << console;
   EXPECT_NE(console.find("Spearman -0."), std::string::npos) << console;
@@ -290,7 +291,7 @@ TEST_F(ReportHtml, ThresholdsOnAFolderWithoutEstimatesSaysWhatToRun) {
   // A visibility objects.csv has no estimate columns.
   std::string header_only = format_objects_csv(visibility_only);
   header_only = header_only.substr(0, header_only.find(",x_mm")) + "\n" +
-                "test,1,0,0,1,obj 1,1000,1000,500,0.5,10,20,30,40,12,20,28,40\n";
+                "test,1,0,0,1,obj 1,1000,1000,500,0.5,10,20,30,40,12,20,28,40,1\n";
   testing::write_text(dir_ / "objects.csv", header_only);
   try {
     load_report_objects(dir_);

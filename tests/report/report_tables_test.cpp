@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/report/report.hpp>
 #include <clutterscope/report/tables.hpp>
+#include <optional>
 
 #include "report_test_tables.hpp"
 
@@ -154,6 +156,68 @@ TEST_F(ReportTables, BadFieldsNameFileLineAndColumn) {
   std::string negative = kEstimatesCsv;
   negative.replace(negative.find("1.5,0.25"), 3, "-1.5");
   EXPECT_THROW(read_estimates_csv(file("estimates.csv", negative)), datasets::DatasetError);
+}
+
+// Undefined values are written empty and read back as undefined: V^s of an image with no
+// object in view, as the visibility command writes it.
+TEST_F(ReportTables, AnEmptySceneVisibilityIsUndefined) {
+  const auto images = read_images_csv(file("images.csv",
+                                           "split,scene_id,im_id,n_objects,scene_visibility\n"
+                                           "test,1,0,3,0.5\n"
+                                           "test,1,1,2,\n"));
+  ASSERT_EQ(images.size(), 2u);
+  EXPECT_EQ(images[0].scene_visibility, std::optional<double>(0.5));
+  EXPECT_FALSE(images[1].scene_visibility);
+}
+
+TEST_F(ReportTables, InViewColumnIsRead) {
+  const std::string text =
+      "split,scene_id,im_id,gt_id,obj_id,label,px_count_all,px_count_valid,px_count_visib,"
+      "visib_fract,bbox_obj_x,bbox_obj_y,bbox_obj_w,bbox_obj_h,bbox_visib_x,bbox_visib_y,"
+      "bbox_visib_w,bbox_visib_h,in_view\n"
+      "test,1,0,0,3,coffee,1200,1000,860,0.86,-5,10,40,50,0,10,35,50,1\n"
+      "test,1,0,1,7,mug,800,0,0,0,-1,-1,-1,-1,-1,-1,-1,-1,0\n"
+      "test,1,0,2,9,tray,5000,4000,4000,1,0,0,300,200,0,0,300,200,1\n";
+  const auto objects = read_objects_csv(file("objects.csv", text));
+  ASSERT_EQ(objects.size(), 3u);
+  EXPECT_TRUE(objects[0].in_view);
+  EXPECT_FALSE(objects[1].in_view);
+  EXPECT_TRUE(objects[2].in_view);
+  EXPECT_EQ(objects_in_view(objects).size(), 2u);
+  // Tables written before the column existed: every object in view.
+  const auto earlier = read_objects_csv(file("earlier.csv", kObjectsCsv));
+  EXPECT_TRUE(std::all_of(earlier.begin(), earlier.end(),
+                          [](const ObjectRow& row) { return row.in_view; }));
+}
+
+// An object out of view (visib_fract 0 as BOP writes it) is counted on its own, not as a
+// fully hidden object: every figure equals the one without it.
+TEST(ReportAnalysisOutOfView, IsCountedAndLeftOutOfEveryFigure) {
+  const std::vector<ObjectRow> rows = testing::synthetic_dataset(4);
+  ReportOptions options;
+  options.bootstrap.resamples = 100;
+  const ReportAnalysis without = analyse_report(rows, {}, options);
+  std::vector<ObjectRow> with = rows;
+  ObjectRow outside = rows.front();
+  outside.gt_id = 99;
+  outside.in_view = false;
+  outside.px_count_valid = outside.px_count_visib = 0;
+  outside.visib_fract = 0.0;
+  with.push_back(outside);
+  const ReportAnalysis analysis = analyse_report(with, {}, options);
+  EXPECT_EQ(analysis.counts.out_of_view, 1);
+  EXPECT_EQ(analysis.counts.objects, without.counts.objects);
+  EXPECT_EQ(analysis.counts.estimated, without.counts.estimated);
+  EXPECT_EQ(analysis.visibility.below_10, without.visibility.below_10);
+  EXPECT_EQ(analysis.visibility.histogram_counts, without.visibility.histogram_counts);
+  EXPECT_EQ(analysis.visibility.median.value, without.visibility.median.value);
+  EXPECT_EQ(analysis.thresholds.chosen.accepted_below_cutoff,
+            without.thresholds.chosen.accepted_below_cutoff);
+  ASSERT_EQ(analysis.images.size(), without.images.size());
+  EXPECT_EQ(analysis.images.front().n_objects, without.images.front().n_objects + 1);
+  EXPECT_EQ(analysis.images.front().scene_visibility, without.images.front().scene_visibility);
+  EXPECT_NE(format_console_summary(analysis).find("1 out of view, not analysed"),
+            std::string::npos);
 }
 
 TEST_F(ReportTables, JoinRefusesEstimatesOfOtherObjects) {

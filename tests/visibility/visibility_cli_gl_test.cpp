@@ -81,7 +81,7 @@ TEST_F(VisibilityCli, RenderedModeWritesEveryOutput) {
   ASSERT_EQ(run.exit_code, 0) << run.errors;
   const auto objects = csv_rows(read_text(out / "objects.csv"));
   ASSERT_EQ(objects.size(), 1u + 2 * 3);  // header + 2 images x 3 instances
-  EXPECT_EQ(objects[0].size(), 18u);
+  EXPECT_EQ(objects[0].size(), 19u);
   EXPECT_EQ(objects[0][9], "visib_fract");
   const auto images = csv_rows(read_text(out / "images.csv"));
   ASSERT_EQ(images.size(), 3u);

@@ -178,6 +178,7 @@ TEST_F(VisibilityGl, EmptyImageAndObjectOutOfView) {
   const ImageVisibility away = compute({{{0.2, 0.2, 0.2}, testing::pose({-10.0, 0.0, 2.0})}}, {});
   EXPECT_EQ(away.objects[0].counts.silhouette_px, 0);
   EXPECT_EQ(away.objects[0].info.visib_fract, 0.0);
+  EXPECT_FALSE(away.objects[0].in_view);
   EXPECT_FALSE(away.scene_visibility.has_value());
 }
 

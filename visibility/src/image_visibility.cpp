@@ -94,6 +94,7 @@ void compute_rendered(render::Renderer& renderer, const render::Intrinsics& intr
   for (std::size_t i = 0; i < instances.size(); ++i) {
     ObjectVisibility& object = result->objects[i];
     object.counts = {counts[i].silhouette_px, counts[i].visible_px};
+    object.in_view = counts[i].silhouette_px > 0;
     BopGtInfo& info = object.info;
     info.px_count_all = counts[i].canvas_silhouette_px;
     info.px_count_valid = counts[i].silhouette_px;
@@ -162,7 +163,12 @@ void compute_bop(render::BopDepthRenderer& renderer, const datasets::Camera& cam
                                       bop_options, masks ? &visib : nullptr);
     // V^s in BOP modes: sum px_count_visib / sum px_count_all, the px_count_all-weighted
     // mean of visib_fract.
-    result_object.counts = {result_object.info.px_count_all, result_object.info.px_count_visib};
+    // An object out of view has px_count_all > 0 when its silhouette reaches the 3W x 3H
+    // canvas: it is kept out of V^s, as in rendered mode.
+    result_object.in_view = cv::countNonZero(model_mm) > 0;
+    if (result_object.in_view) {
+      result_object.counts = {result_object.info.px_count_all, result_object.info.px_count_visib};
+    }
     if (masks) {
       cv::Mat silhouette_mask(height, width, CV_8U, cv::Scalar(0));
       cv::Mat visible_mask(height, width, CV_8U, cv::Scalar(0));

@@ -204,7 +204,9 @@ class VisibilityWorker {
     nlohmann::json objects = nlohmann::json::array();
     for (std::size_t gt = 0; gt < result.objects.size(); ++gt) {
       const BopGtInfo& info = result.objects[gt].info;
+      const bool in_view = result.objects[gt].in_view;
       objects.push_back(info_json(info));
+      objects.back()["in_view"] = in_view;
       // Every instance occludes and goes to scene_gt_info.json; rows are for targets only.
       if (!is_target(view, static_cast<int>(gt))) continue;
       batch::CsvRow row;
@@ -216,6 +218,7 @@ class VisibilityWorker {
           .add(python_float_repr(info.visib_fract));
       for (int value : info.bbox_obj) row.add(value);
       for (int value : info.bbox_visib) row.add(value);
+      row.add(in_view ? 1 : 0);
       object_rows += row.str();
     }
     batch::CsvRow image_row;
@@ -415,12 +418,20 @@ class VisibilitySummary : public batch::SummaryBuilder {
     }
     std::vector<BopGtInfo> infos;
     for (const nlohmann::json& object : objects) infos.push_back(info_from_json(object));
-    if (record.summary.contains("targets")) {
-      for (const nlohmann::json& gt : record.summary.at("targets")) {
-        objects_.add(infos.at(gt.get<std::size_t>()).visib_fract);
+    // An object out of view is counted as such, not as a fully hidden one: the distribution
+    // is over the objects in view.
+    const auto add_object = [&](std::size_t gt) {
+      if (objects.at(gt).value("in_view", true)) {
+        objects_.add(infos.at(gt).visib_fract);
+      } else {
+        ++objects_out_of_view_;
       }
+    };
+    if (record.summary.contains("targets")) {
+      for (const nlohmann::json& gt : record.summary.at("targets"))
+        add_object(gt.get<std::size_t>());
     } else {
-      for (const BopGtInfo& info : infos) objects_.add(info.visib_fract);
+      for (std::size_t gt = 0; gt < infos.size(); ++gt) add_object(gt);
     }
     const nlohmann::json& scene = record.summary.at("scene_visibility");
     if (scene.is_null()) {
@@ -440,7 +451,11 @@ class VisibilitySummary : public batch::SummaryBuilder {
     summary["counts"]["images_computed"] = images_;
     summary["counts"]["images_without_objects"] = images_without_objects_;
     summary["counts"]["images_with_undefined_scene_visibility"] = images_undefined_;
+    summary["counts"]["objects_out_of_view"] = objects_out_of_view_;
     summary["object_visibility"] = objects_.to_json("fully_hidden", "fully_visible");
+    summary["object_visibility"]["objects"] =
+        "in view only: counts.objects_out_of_view (no pixel of the silhouette inside the image) "
+        "are neither hidden nor visible and are left out";
     summary["scene_visibility"] = scenes_.to_json("zero", "one");
     summary["input_checks"] = input_checks_.to_json();
     summary["timing"] =
@@ -469,6 +484,7 @@ class VisibilitySummary : public batch::SummaryBuilder {
   Distribution objects_, scenes_;
   batch::InputCheckTotals input_checks_;
   std::int64_t images_ = 0, images_without_objects_ = 0, images_undefined_ = 0;
+  std::int64_t objects_out_of_view_ = 0;
 };
 
 }  // namespace

@@ -45,7 +45,8 @@ const TableLayout& visibility_objects_table() {
                                    {"bbox_visib_x"},
                                    {"bbox_visib_y"},
                                    {"bbox_visib_w"},
-                                   {"bbox_visib_h"}}};
+                                   {"bbox_visib_h"},
+                                   later("in_view")}};
   return layout;
 }
 

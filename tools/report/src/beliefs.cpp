@@ -52,10 +52,10 @@ std::vector<BeliefSampleRow> read_beliefs_csv(const std::filesystem::path& path)
 std::vector<ImageSummary> choose_belief_images(const std::vector<ImageSummary>& images, int count) {
   std::vector<const ImageSummary*> order;
   for (const ImageSummary& image : images) {
-    if (image.n_estimated > 0) order.push_back(&image);
+    if (image.n_estimated > 0 && image.scene_visibility) order.push_back(&image);
   }
   std::stable_sort(order.begin(), order.end(), [](const auto* a, const auto* b) {
-    return a->scene_visibility < b->scene_visibility;
+    return *a->scene_visibility < *b->scene_visibility;
   });
   std::vector<ImageSummary> chosen;
   if (order.empty() || count <= 0) return chosen;
@@ -152,7 +152,8 @@ NamedPlot belief_plot(const BeliefImage& figure, double variance_threshold_cm2) 
   plot.name = belief_plot_name(image);
   const std::string threshold = batch::printf_general(variance_threshold_cm2);
   plot.caption = "Belief samples of the " + std::to_string(drawn) + " estimated objects of " +
-                 image_id(image) + " (scene visibility " + percent(image.scene_visibility) +
+                 image_id(image) + " (scene visibility " +
+                 (image.scene_visibility ? percent(*image.scene_visibility) : "undefined") +
                  ") projected on its " + figure.background_kind +
                  (iterations.empty()
                       ? std::string(" (no belief samples)")

@@ -168,10 +168,13 @@ std::vector<NamedPlot> standard_plots(const std::vector<ObjectRow>& objects,
                    visibility_histogram_plot(objects, options.visibility_cutoff)});
 
   // Most cluttered images first (lowest V^s), ties in key order.
+  // Images without an object in view have no V^s and no bars.
   std::vector<const ImageSummary*> order;
-  for (const ImageSummary& image : analysis.images) order.push_back(&image);
+  for (const ImageSummary& image : analysis.images) {
+    if (image.scene_visibility) order.push_back(&image);
+  }
   std::stable_sort(order.begin(), order.end(), [](const auto* a, const auto* b) {
-    return a->scene_visibility < b->scene_visibility;
+    return *a->scene_visibility < *b->scene_visibility;
   });
   order.resize(std::min<size_t>(order.size(), options.images_with_bars));
   for (const ImageSummary* image : order) {
@@ -193,7 +196,7 @@ std::vector<NamedPlot> standard_plots(const std::vector<ObjectRow>& objects,
                      "Objects of " + id + " with their visibility (red below " +
                          printf_fixed(100.0 * options.visibility_cutoff, 0) +
                          "%); scene visibility " +
-                         printf_fixed(100.0 * image->scene_visibility, 1) + "%.",
+                         printf_fixed(100.0 * *image->scene_visibility, 1) + "%.",
                      image_visibility_plot("Visibility of the objects in " + id, image_objects,
                                            options.visibility_cutoff)});
   }

@@ -6,6 +6,7 @@
 #include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/report/report.hpp>
 #include <cmath>
+#include <iterator>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -52,7 +53,7 @@ std::vector<ImageSummary> summarise_images(const std::vector<ObjectRow>& objects
                                            const std::vector<ImageVisibilityRow>& visibility_images,
                                            const ReportOptions& options) {
   std::vector<ImageSummary> images;
-  std::map<ImageKey, double> scene_visibility;
+  std::map<ImageKey, std::optional<double>> scene_visibility;
   for (const ImageVisibilityRow& row : visibility_images) {
     scene_visibility[{row.split, row.scene_id, row.im_id}] = row.scene_visibility;
   }
@@ -65,18 +66,22 @@ std::vector<ImageSummary> summarise_images(const std::vector<ObjectRow>& objects
     long long visible = 0, valid = 0;
     std::vector<double> variances;
     for (const ObjectRow* row : rows) {
-      visible += row->px_count_visib;
-      valid += row->px_count_valid;
+      if (row->in_view) {
+        visible += row->px_count_visib;
+        valid += row->px_count_valid;
+      }
       if (!row->estimate) continue;
       ++image.n_estimated;
       variances.push_back(row->estimate->max_variance_cm2());
       image.n_confident += row->estimate->confident_at(options.variance_threshold_cm2);
     }
     const auto given = scene_visibility.find(key);
-    // Eq. 10's V^s; an image whose objects have no pixel in view has V^s = 0.
-    image.scene_visibility = given != scene_visibility.end() ? given->second
-                             : valid > 0                     ? static_cast<double>(visible) / valid
-                                                             : 0.0;
+    // Eq. 10's V^s; undefined for an image whose objects have no pixel in view.
+    if (given != scene_visibility.end()) {
+      image.scene_visibility = given->second;
+    } else if (valid > 0) {
+      image.scene_visibility = static_cast<double>(visible) / static_cast<double>(valid);
+    }
     image.mean_max_variance_cm2 =
         variances.empty() ? Statistic::undefined("no estimates in this image") : mean(variances);
     images.push_back(std::move(image));
@@ -85,6 +90,13 @@ std::vector<ImageSummary> summarise_images(const std::vector<ObjectRow>& objects
 }
 
 }  // namespace
+
+std::vector<ObjectRow> objects_in_view(const std::vector<ObjectRow>& objects) {
+  std::vector<ObjectRow> in_view;
+  std::copy_if(objects.begin(), objects.end(), std::back_inserter(in_view),
+               [](const ObjectRow& object) { return object.in_view; });
+  return in_view;
+}
 
 bool ReportOptions::IsValid(std::string* why) const {
   ThresholdOptions thresholds;
@@ -105,13 +117,17 @@ bool ReportOptions::IsValid(std::string* why) const {
   return true;
 }
 
-ReportAnalysis analyse_report(const std::vector<ObjectRow>& objects,
+ReportAnalysis analyse_report(const std::vector<ObjectRow>& all_objects,
                               const std::vector<ImageVisibilityRow>& visibility_images,
                               const ReportOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument(why);
   ReportAnalysis analysis;
   analysis.options = options;
+  // An object out of view is neither hidden nor visible: its visib_fract 0 would count it as
+  // fully hidden. Every figure is over the objects in view; the others are only counted.
+  const std::vector<ObjectRow> objects = objects_in_view(all_objects);
+  analysis.counts.out_of_view = static_cast<int>(all_objects.size() - objects.size());
 
   // Counts and visibility distribution.
   ReportCounts& counts = analysis.counts;
@@ -163,7 +179,7 @@ ReportAnalysis analyse_report(const std::vector<ObjectRow>& objects,
   analysis.thresholds = analyse_thresholds(objects, threshold_options);
   analysis.calibration = analyse_calibration(objects, options);
 
-  analysis.images = summarise_images(objects, visibility_images, options);
+  analysis.images = summarise_images(all_objects, visibility_images, options);
   counts.images = static_cast<int>(analysis.images.size());
   return analysis;
 }
@@ -173,8 +189,8 @@ std::string format_images_csv(const std::vector<ImageSummary>& images) {
   out << batch::report_images_table().header() << '\n';
   for (const ImageSummary& image : images) {
     out << image.split << ',' << image.scene_id << ',' << image.im_id << ',' << image.n_objects
-        << ',' << batch::format_shortest(image.scene_visibility) << ',' << image.n_estimated << ','
-        << image.n_confident << ','
+        << ',' << (image.scene_visibility ? batch::format_shortest(*image.scene_visibility) : "")
+        << ',' << image.n_estimated << ',' << image.n_confident << ','
         << (image.mean_max_variance_cm2.defined()
                 ? batch::format_shortest(*image.mean_max_variance_cm2.value)
                 : "")
@@ -191,7 +207,11 @@ std::string format_console_summary(const ReportAnalysis& analysis) {
   std::ostringstream out;
   out << "objects:               " << analysis.counts.objects << " in " << analysis.counts.images
       << " images, " << analysis.counts.estimated << " estimated, " << analysis.counts.confident
-      << " confident\n";
+      << " confident";
+  if (analysis.counts.out_of_view > 0) {
+    out << "; " << analysis.counts.out_of_view << " out of view, not analysed";
+  }
+  out << "\n";
   out << "median visibility:     "
       << (analysis.visibility.median.defined()
               ? printf_fixed(100.0 * *analysis.visibility.median.value, 1) + "%"

@@ -96,7 +96,8 @@ bool ThresholdCheckOptions::IsValid(std::string* why) const {
 std::string threshold_check(const ThresholdCheckOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument(why);
-  const std::vector<ObjectRow> objects = load_report_objects(options.report_dir);
+  // Over the objects in view, as the report computed its thresholds.
+  const std::vector<ObjectRow> objects = objects_in_view(load_report_objects(options.report_dir));
   double accurate_cm = 1.0;
   const std::filesystem::path summary = options.report_dir / "summary.json";
   if (options.accurate_cm) {

@@ -57,7 +57,9 @@ void write_summary(std::ostringstream& out, const ReportAnalysis& analysis) {
     return whole > 0 ? printf_fixed(100.0 * part / whole, 1) + "%" : std::string("n/a");
   };
   out << "<section id=\"summary\">\n<h2>Summary</h2>\n<table>\n"
-      << "<tr><th class=\"text\">objects</th><td>" << c.objects << "</td></tr>\n"
+      << "<tr><th class=\"text\">objects in view</th><td>" << c.objects << "</td></tr>\n"
+      << "<tr><th class=\"text\">objects out of view (not analysed)</th><td>" << c.out_of_view
+      << "</td></tr>\n"
       << "<tr><th class=\"text\">images</th><td>" << c.images << "</td></tr>\n"
       << "<tr><th class=\"text\">estimated objects</th><td>" << c.estimated << "</td></tr>\n"
       << "<tr><th class=\"text\">not estimated (fixed or failed)</th><td>" << c.not_estimated

@@ -353,7 +353,7 @@ ReportRun run_report(const ReportJobOptions& options, const ReportSteps& steps) 
   const ReportAnalysis analysis = analyse_report(
       objects, read_images_csv(visibility_dir / batch::visibility_images_table().file_name),
       options.analysis);
-  std::vector<NamedPlot> plots = standard_plots(objects, analysis);
+  std::vector<NamedPlot> plots = standard_plots(objects_in_view(objects), analysis);
   BeliefFigures beliefs = belief_figures(options, steps, dir, objects, analysis);
   run.exit_code = std::max(run.exit_code, beliefs.exit_code);
   run.steps.push_back(beliefs.step);

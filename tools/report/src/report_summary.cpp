@@ -92,7 +92,8 @@ Json counts_json(const ReportCounts& c) {
           {"with_error", c.with_error},
           {"confident", c.confident},
           {"confident_with_error", c.confident_with_error},
-          {"confident_inaccurate", c.confident_inaccurate}};
+          {"confident_inaccurate", c.confident_inaccurate},
+          {"out_of_view", c.out_of_view}};
 }
 
 Json visibility_json(const VisibilitySummary& v) {
@@ -197,10 +198,14 @@ Json calibration_json(const CalibrationAnalysis& calibration) {
 }
 
 Json images_json(const std::vector<ImageSummary>& summaries) {
+  // Over the images with a V^s; those without an object in view have none.
   std::vector<double> scene_visibility;
-  for (const ImageSummary& image : summaries) scene_visibility.push_back(image.scene_visibility);
+  for (const ImageSummary& image : summaries) {
+    if (image.scene_visibility) scene_visibility.push_back(*image.scene_visibility);
+  }
   Json images, images_undefined = Json::object();
   images["count"] = summaries.size();
+  images["without_scene_visibility"] = summaries.size() - scene_visibility.size();
   put(images, images_undefined, "scene_visibility_median", median(scene_visibility));
   put(images, images_undefined, "scene_visibility_min", quantile(scene_visibility, 0.0));
   put(images, images_undefined, "scene_visibility_max", quantile(scene_visibility, 1.0));

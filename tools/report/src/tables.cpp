@@ -101,6 +101,7 @@ std::vector<ObjectRow> read_objects_csv(const std::filesystem::path& path) {
       row.bbox_obj[i] = table.integer(record, std::string("bbox_obj_") + bbox_suffix[i]);
       row.bbox_visib[i] = table.integer(record, std::string("bbox_visib_") + bbox_suffix[i]);
     }
+    if (table.has_column("in_view")) row.in_view = table.boolean(record, "in_view");
     if (with_estimates) row.estimate = parse_estimate(table, record);
     if (!seen.insert(Key(row.split, row.scene_id, row.im_id, row.gt_id)).second) {
       table.fail(record, "gt_id", "duplicate object row");
@@ -141,8 +142,9 @@ std::vector<ImageVisibilityRow> read_images_csv(const std::filesystem::path& pat
     row.scene_id = table.integer(record, "scene_id");
     row.im_id = table.integer(record, "im_id");
     row.n_objects = table.integer(record, "n_objects");
-    row.scene_visibility = table.number(record, "scene_visibility");
-    if (row.scene_visibility < 0.0 || row.scene_visibility > 1.0) {
+    // Written empty when undefined (no object in view), read back as undefined.
+    row.scene_visibility = table.optional_number(record, "scene_visibility");
+    if (row.scene_visibility && (*row.scene_visibility < 0.0 || *row.scene_visibility > 1.0)) {
       table.fail(record, "scene_visibility", "must be in [0, 1]");
     }
     rows.push_back(std::move(row));
@@ -192,6 +194,7 @@ std::string format_objects_csv(const std::vector<ObjectRow>& objects) {
         << batch::format_shortest(row.visib_fract);
     for (int value : row.bbox_obj) out << ',' << value;
     for (int value : row.bbox_visib) out << ',' << value;
+    out << ',' << (row.in_view ? 1 : 0);
     if (row.estimate) {
       const PoseEstimate& e = *row.estimate;
       out << ',' << batch::format_shortest(e.x_mm) << ',' << batch::format_shortest(e.y_mm) << ','

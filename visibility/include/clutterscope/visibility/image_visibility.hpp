@@ -38,6 +38,10 @@ struct ObjectVisibility {
   // the px_count_all-weighted mean of visib_fract as V^s is the K_i-weighted mean of V_i.
   Eq10Counts counts;
   BopGtInfo info;  // the scene_gt_info.json fields
+  // Some pixel of the object's silhouette (rendered alone, unoccluded) lies inside the image.
+  // An object out of view is neither visible nor hidden: its counts are 0 (it takes no part in
+  // V^s) and info keeps BOP's fields (visib_fract 0, as bop_toolkit writes it).
+  bool in_view = false;
 };
 
 struct ImageVisibility {

@@ -36,7 +36,8 @@ struct ReportOptions {
 };
 
 struct ReportCounts {
-  int objects = 0;
+  int objects = 0;      // in view: the objects every figure below is computed over
+  int out_of_view = 0;  // no pixel of the silhouette in the image: left out of the analysis
   int images = 0;
   int estimated = 0;
   int not_estimated = 0;  // fixed nodes and failed estimates
@@ -61,7 +62,9 @@ struct ImageSummary {
   int scene_id = 0;
   int im_id = 0;
   int n_objects = 0;
-  double scene_visibility = 0.0;  // V^s from visibility images.csv, else sum visib / sum valid
+  // V^s from visibility images.csv, else sum visib / sum valid; undefined when no object of
+  // the image is in view.
+  std::optional<double> scene_visibility;
   int n_estimated = 0;
   int n_confident = 0;
   Statistic mean_max_variance_cm2;
@@ -90,8 +93,12 @@ struct ReportAnalysis {
   std::vector<ImageSummary> images;  // in (split, scene, image) order
 };
 
-// Runs the whole analysis. `visibility_images` (visibility images.csv) supplies V^s where it
-// has the image; may be empty. Throws std::invalid_argument for invalid options.
+// The objects with in_view set, in order: those every figure of the report is computed over.
+std::vector<ObjectRow> objects_in_view(const std::vector<ObjectRow>& objects);
+
+// Runs the whole analysis over the objects in view (counts.out_of_view counts the others; the
+// per-image table has every image). `visibility_images` (visibility images.csv) supplies V^s where
+// it has the image; may be empty. Throws std::invalid_argument for invalid options.
 ReportAnalysis analyse_report(const std::vector<ObjectRow>& objects,
                               const std::vector<ImageVisibilityRow>& visibility_images,
                               const ReportOptions& options);

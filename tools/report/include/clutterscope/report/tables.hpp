@@ -59,7 +59,10 @@ struct ObjectRow {
   double visib_fract = 0.0;                         // V_i in [0, 1]
   std::array<int, 4> bbox_obj{{-1, -1, -1, -1}};    // x, y, w, h
   std::array<int, 4> bbox_visib{{-1, -1, -1, -1}};  // x, y, w, h
-  std::optional<PoseEstimate> estimate;             // empty: not estimated (fixed node) or failed
+  // Some pixel of the unoccluded silhouette lies inside the image (column in_view; tables
+  // written before it existed: true). An object out of view is neither hidden nor visible.
+  bool in_view = true;
+  std::optional<PoseEstimate> estimate;  // empty: not estimated (fixed node) or failed
 };
 
 // One row of visibility images.csv: split,scene_id,im_id,n_objects,scene_visibility.
@@ -68,7 +71,8 @@ struct ImageVisibilityRow {
   int scene_id = 0;
   int im_id = 0;
   int n_objects = 0;
-  double scene_visibility = 0.0;  // V^s = sum v_i / sum K_i
+  // V^s = sum v_i / sum K_i; empty (undefined) when no object of the image is in view.
+  std::optional<double> scene_visibility;
 };
 
 // One estimates.csv row: the key and the estimate (empty when the row records a failure,
