@@ -283,11 +283,11 @@ TEST_F(ReportCli, RefusesAFolderOfAnotherDatasetOrOtherOptions) {
   const std::vector<std::pair<std::string, std::string>> cases = {
       {report_arguments(copy, report_dir()), "/dataset/dataset"},
       {report_arguments(dataset(), report_dir(), " --scenes 1"), "/dataset/scenes"},
-      {report_arguments(dataset(), report_dir(), " --mode bop19"), "/visibility/--mode"},
+      {report_arguments(dataset(), report_dir(), " --mode bop19"), "/visibility/mode"},
       {"report \"" + dataset().string() + "\" --out \"" + report_dir().string() +
            "\" --particles 13 --iterations 2 --gibbs-sweeps 1 --icp-samples 4 --quiet",
-       "/estimate/--particles"},
-      {report_arguments(dataset(), report_dir(), " --seed 2"), "/estimate/--seed"}};
+       "/estimate/particles"},
+      {report_arguments(dataset(), report_dir(), " --seed 2"), "/estimate/seed"}};
   for (const auto& [arguments, difference] : cases) {
     const CommandRun refused = run(arguments);
     EXPECT_EQ(refused.exit_code, 2) << arguments << "\n" << refused.errors;

@@ -88,7 +88,8 @@ int run_sensor_fit(const SensorFitArguments& arguments) {
   if (!(arguments.tolerance > 0)) throw batch::UsageError("--tolerance must be > 0");
   const datasets::SensorOptions sensor = arguments.sensor.resolve();
   const datasets::BopDataset dataset = open_dataset(arguments.dataset);
-  const std::vector<datasets::ImageKey> keys = dataset.list_images(selection_of(arguments.dataset));
+  const std::vector<datasets::ImageKey> keys =
+      batch::list_selected_images(dataset, arguments.dataset);
   if (keys.empty()) throw batch::UsageError("no images selected in " + arguments.dataset.dataset);
 
   const render::EglContext context = render::EglContext::create();
