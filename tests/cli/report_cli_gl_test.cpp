@@ -441,11 +441,16 @@ TEST_F(ReportCli, ThresholdsRejectsBadValuesWithExitCode2) {
 
 TEST_F(ReportCli, ThresholdsOnAFolderWithoutEstimatesSaysWhatToRun) {
   // The visibility step's folder has objects.csv with visibility columns only.
-  for (const fs::path& dir : {report_dir() / "visibility", *root_ / "empty_folder"}) {
+  // The report's own step folder: the report folder holds what thresholds reads.
+  for (const auto& [dir, advice] :
+       {std::pair<fs::path, std::string>{
+            report_dir() / "visibility",
+            "run `clutterscope thresholds` on " + report_dir().string()},
+        std::pair<fs::path, std::string>{*root_ / "empty_folder", "clutterscope report"}}) {
     fs::create_directories(dir);
     const CommandRun refused = run("thresholds \"" + dir.string() + "\" --variance-cm2 0.25");
     EXPECT_EQ(refused.exit_code, 3) << dir << "\n" << refused.errors;
-    EXPECT_NE(refused.errors.find("clutterscope report"), std::string::npos) << refused.errors;
+    EXPECT_NE(refused.errors.find(advice), std::string::npos) << refused.errors;
   }
 }
 

@@ -103,32 +103,38 @@ class HelpFormatter : public CLI::Formatter {
 
 // Exit codes 2-4 mean the same for every command; 0 and 1 are each command's own.
 constexpr const char* kCommonExitCodes =
-    "2 usage error, 3 bad input data (the message names file, scene, image and field),\n"
-    "4 rendering or runtime failure.";
+    "  2 usage error\n"
+    "  3 bad input data (the message names file, scene, image and field)\n"
+    "  4 rendering or runtime failure";
 
-// What exit codes 0 and 1 mean for `command` ("bench visibility" for a benchmark).
+// What exit codes 0 and 1 mean for `command` ("bench visibility" for a benchmark), one per line.
 std::string own_exit_codes(const std::string& command) {
   const std::string failed_images =
-      "0 ok, 1 some images failed under --keep-going (listed in summary.json)";
+      "  0 ok\n  1 some images failed under --keep-going (listed in summary.json)\n";
   static const std::map<std::string, std::string> codes = {
+      {"", "  0 ok\n  1 as the command's --help says\n"},
       {"visibility", failed_images},
       {"estimate", failed_images},
       {"report", failed_images},
       {"merge",
-       "0 ok, 1 the merged job holds images that failed under --keep-going (listed in "
-       "summary.json)"},
+       "  0 ok\n  1 the merged job holds images that failed under --keep-going (listed in "
+       "summary.json)\n"},
       {"sensor-fit",
-       "0 every statistic of the preset agrees within --tolerance, 1 some "
-       "statistic is off by more than --tolerance (marked in the table)"}};
+       "  0 every statistic of the preset agrees within --tolerance\n"
+       "  1 some statistic is off by more than --tolerance (marked in the table)\n"}};
   const auto found = codes.find(command);
-  return found == codes.end() ? "0 ok" : found->second;
+  return found == codes.end() ? "  0 ok\n" : found->second;
+}
+
+std::string exit_codes_footer(const std::string& command) {
+  return "Exit codes:\n" + own_exit_codes(command) + kCommonExitCodes;
 }
 
 // Each command's --help ends with its own exit codes.
 void describe_exit_codes(CLI::App& app, const std::string& prefix) {
   for (CLI::App* command : app.get_subcommands({})) {
     const std::string name = prefix + command->get_name();
-    command->footer("Exit codes: " + own_exit_codes(name) + ",\n" + kCommonExitCodes);
+    command->footer(exit_codes_footer(name));
     describe_exit_codes(*command, name + " ");
   }
 }
@@ -140,7 +146,7 @@ void describe_app(CLI::App& app) {
       "Run `clutterscope COMMAND --help` for a command's options.");
   app.set_version_flag("--version", std::string("clutterscope ") + CLUTTERSCOPE_VERSION);
   app.require_subcommand(1);
-  app.footer(std::string("Exit codes: 0 ok, 1 as each command's --help says, ") + kCommonExitCodes);
+  app.footer(exit_codes_footer(""));
   app.get_formatter()->column_width(28);
 }
 
