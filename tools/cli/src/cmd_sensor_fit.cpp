@@ -15,6 +15,7 @@
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/model_cache.hpp>
 #include <clutterscope/render/renderer.hpp>
+#include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/scene_estimation/synthetic_view.hpp>
 #include <cmath>
 #include <cstdio>
@@ -186,7 +187,8 @@ int run_sensor_fit(const SensorFitArguments& arguments) {
                                  {"measured", summary_json(m)},
                                  {"simulated", summary_json(s)},
                                  {"rows", rows},
-                                 {"all_agree", all_agree}};
+                                 {"all_agree", all_agree},
+                                 {"gl_renderer", render::renderer_in_use()}};
     datasets::write_file_atomically(arguments.json, json.dump(2) + "\n");
   }
   return all_agree ? 0 : 1;
