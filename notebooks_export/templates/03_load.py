@@ -57,6 +57,17 @@ objects["max_var_cm2"] = (objects[VARIANCE_COLUMNS].max(axis=1, skipna=False)
 if "err_cm" not in objects.columns:
     objects["err_cm"] = np.nan
 objects["estimated"] = objects["max_var_cm2"].notna()
+# The estimator's consistency checks (pixels seen through the estimate, ICP's shift from its
+# belief): an estimate that fails them is never confident, whatever its variance. Reports of
+# earlier versions have no column: every estimate passed.
+objects["consistent"] = (as_bool(objects["consistent"]) == True  # noqa: E712 (NaN: no estimate)
+                         if "consistent" in objects.columns else True)
+
+
+def confident_at(frame, threshold):
+    """The report's rule: the largest axis variance <= threshold and the consistency checks passed."""
+    return (frame["max_var_cm2"] <= threshold) & frame["consistent"]
+
 
 images_path = report_dir / "images.csv"
 if images_path.exists():

@@ -4,8 +4,9 @@ scored_accurate = scored["err_cm"] <= ACCURATE_CM
 
 
 def threshold_check(threshold):
-    """Precision, recall and F1 of "max variance <= threshold" against "error <= ACCURATE_CM"."""
-    confident = scored["max_var_cm2"] <= threshold
+    """Precision, recall and F1 of "confident at threshold" against "error <= ACCURATE_CM", over
+    the estimates with a measured error, as the report counts them."""
+    confident = confident_at(scored, threshold)
     hits = int((confident & scored_accurate).sum())
     n_confident = int(confident.sum())
     n_accurate = int(scored_accurate.sum())
@@ -15,24 +16,35 @@ def threshold_check(threshold):
         f1 = np.nan
     else:
         f1 = 0.0 if precision + recall == 0 else 2 * precision * recall / (precision + recall)
-    all_estimated = objects[objects["estimated"]]
-    accepted_below = int(((all_estimated["max_var_cm2"] <= threshold)
-                          & (all_estimated["visib_fract"] < VISIBILITY_CUTOFF)).sum())
+    accepted_below = int((confident & (scored["visib_fract"] < VISIBILITY_CUTOFF)).sum())
     return {"threshold_cm2": threshold, "confident": n_confident, "accurate": n_accurate,
             "confident_and_accurate": hits, "precision": precision, "recall": recall, "f1": f1,
             "accepted_below_cutoff": accepted_below}
 
 
-thresholds = np.unique(np.concatenate([np.logspace(-2, 1, 31), [0.25, VARIANCE_THRESHOLD_CM2]]))
+def log_sweep(low, high, per_decade, exact):
+    """The report's sweep: log-spaced from low to high (4 significant digits), grid points within
+    3% of an exact value dropped, the exact values added."""
+    steps = math.ceil(math.log10(high / low) * per_decade - 1e-9)
+    grid = [high if k == steps else float(f"{low * 10 ** (k / per_decade):.4g}")
+            for k in range(steps + 1)]
+    grid = [t for t in grid if not any(abs(t - e) <= 0.03 * e for e in exact)]
+    return sorted(set(grid) | set(exact))
+
+
+thresholds = log_sweep(0.01, 10.0, 10, [0.25, VARIANCE_THRESHOLD_CM2])
 sweep = pd.DataFrame([threshold_check(t) for t in thresholds])
-safe = sweep[sweep["precision"] >= PRECISION_TARGET]
-recommended = float(safe["threshold_cm2"].max()) if not safe.empty else None
-best_f1 = (float(sweep.loc[sweep["f1"].idxmax(), "threshold_cm2"])
-           if sweep["f1"].notna().any() else None)
+# Ascending thresholds, the later one winning ties, as the report recommends.
+recommended, best_f1, best_f1_value = None, None, None
+for row in sweep.itertuples():
+    if not np.isnan(row.precision) and row.precision >= PRECISION_TARGET:
+        recommended = float(row.threshold_cm2)
+    if not np.isnan(row.f1) and (best_f1_value is None or row.f1 >= best_f1_value):
+        best_f1, best_f1_value = float(row.threshold_cm2), row.f1
 print(f"{len(scored)} estimates with a measured error, {int(scored_accurate.sum())} of them accurate")
 print(f"largest threshold with precision >= {PRECISION_TARGET}: "
-      f"{'undefined' if recommended is None else f'{recommended:.3g} cm²'}; F1 optimum at "
-      f"{'undefined' if best_f1 is None else f'{best_f1:.3g} cm²'}")
+      f"{'undefined' if recommended is None else f'{recommended:.6g} cm²'}; F1 optimum at "
+      f"{'undefined' if best_f1 is None else f'{best_f1:.6g} cm²'}")
 
 fig, ax = plt.subplots(figsize=(7.5, 4))
 for column, color in [("precision", "tab:blue"), ("recall", "tab:orange"), ("f1", "tab:green")]:

@@ -1,6 +1,6 @@
 chosen = threshold_check(VARIANCE_THRESHOLD_CM2)
 estimated = objects[objects["estimated"]]
-confident_now = estimated["max_var_cm2"] <= VARIANCE_THRESHOLD_CM2
+confident_now = confident_at(estimated, VARIANCE_THRESHOLD_CM2)
 below = objects["visib_fract"] < VISIBILITY_CUTOFF
 check = pd.DataFrame({"value": [
     f"{VARIANCE_THRESHOLD_CM2:g}", f"{VISIBILITY_CUTOFF:g}", f"{ACCURATE_CM:g}",
@@ -16,13 +16,18 @@ display(check)
 print(f"threshold check: precision {fmt(chosen['precision'])}, recall {fmt(chosen['recall'])}, "
       f"F1 {fmt(chosen['f1'])}, confident {int(confident_now.sum())}, "
       f"accepted below cutoff {chosen['accepted_below_cutoff']}")
+print(f"with a measured error: {len(scored)} estimates, {chosen['accurate']} accurate, "
+      f"{chosen['confident']} confident, {chosen['confident_and_accurate']} confident and accurate")
 
-cutoffs = np.round(np.linspace(0.1, 1.0, 10), 2)
+cutoffs = np.round(np.linspace(0.1, 0.9, 9), 2)
+off = estimated["err_cm"] > ACCURATE_CM
 converse = pd.DataFrame({
     "visibility below": [f"{c:.0%}" for c in cutoffs],
     "objects": [int((objects["visib_fract"] < c).sum()) for c in cutoffs],
     "with an estimate": [int((estimated["visib_fract"] < c).sum()) for c in cutoffs],
-    "accepted": [int(((estimated["visib_fract"] < c) & confident_now).sum()) for c in cutoffs]})
+    "accepted": [int(((estimated["visib_fract"] < c) & confident_now).sum()) for c in cutoffs],
+    "accepted & inaccurate": [int(((estimated["visib_fract"] < c) & confident_now & off).sum())
+                              for c in cutoffs]})
 display(converse)
 
 if "confident" in estimated.columns:

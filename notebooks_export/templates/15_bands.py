@@ -5,7 +5,7 @@ def defined(column, statistic):
 
 
 def band_row(group):
-    confident = group["max_var_cm2"] <= VARIANCE_THRESHOLD_CM2
+    confident = confident_at(group, VARIANCE_THRESHOLD_CM2)
     confident_scored = confident & group["err_cm"].notna()
     off = confident_scored & (group["err_cm"] > ACCURATE_CM)
     return pd.Series({

@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <climits>
 #include <clutterscope/render/context.hpp>
+#include <clutterscope/render/renderer_in_use.hpp>
 #include <cstdlib>
 #include <cstring>
 #include <map>
@@ -276,6 +277,22 @@ int device_index_from_environment() {
   return static_cast<int>(value);
 }
 
+// GL_RENDERER (GL_VERSION) of the first context of the process, for renderer_in_use().
+std::mutex& renderer_mutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
+std::string& first_renderer() {
+  static std::string name;
+  return name;
+}
+
+void record_renderer(const std::string& name) {
+  const std::lock_guard<std::mutex> lock(renderer_mutex());
+  if (first_renderer().empty()) first_renderer() = name;
+}
+
 }  // namespace
 
 struct EglContext::State {
@@ -393,6 +410,7 @@ EglContext EglContext::create_on_display(int device_index, bool allow_second_scr
   }
   state->renderer = gl_string(GL_RENDERER);
   state->version = gl_string(GL_VERSION);
+  record_renderer(state->renderer + " (" + state->version + ")");
   guard.state = nullptr;
   return EglContext(std::move(state));
 }
@@ -404,6 +422,11 @@ void EglContext::make_current() const {
       EGL_TRUE) {
     throw RenderError("eglMakeCurrent failed: " + egl_error_name(eglGetError()));
   }
+}
+
+std::string renderer_in_use() {
+  const std::lock_guard<std::mutex> lock(renderer_mutex());
+  return first_renderer();
 }
 
 std::string EglContext::renderer() const { return state_ ? state_->renderer : ""; }

@@ -58,7 +58,7 @@ TEST(Cli, HelpListsCommandsAndExitCodes) {
         << expected << " missing from:\n"
         << result.output;
   }
-  EXPECT_NE(result.output.find("Exit codes: 0 ok, 1 "), std::string::npos) << result.output;
+  EXPECT_NE(result.output.find("Exit codes:\n  0 ok\n  1 "), std::string::npos) << result.output;
 }
 
 TEST(Cli, EveryCommandHasAnInformativeHelp) {

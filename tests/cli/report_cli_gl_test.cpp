@@ -283,11 +283,11 @@ TEST_F(ReportCli, RefusesAFolderOfAnotherDatasetOrOtherOptions) {
   const std::vector<std::pair<std::string, std::string>> cases = {
       {report_arguments(copy, report_dir()), "/dataset/dataset"},
       {report_arguments(dataset(), report_dir(), " --scenes 1"), "/dataset/scenes"},
-      {report_arguments(dataset(), report_dir(), " --mode bop19"), "/visibility/--mode"},
+      {report_arguments(dataset(), report_dir(), " --mode bop19"), "/visibility/mode"},
       {"report \"" + dataset().string() + "\" --out \"" + report_dir().string() +
            "\" --particles 13 --iterations 2 --gibbs-sweeps 1 --icp-samples 4 --quiet",
-       "/estimate/--particles"},
-      {report_arguments(dataset(), report_dir(), " --seed 2"), "/estimate/--seed"}};
+       "/estimate/particles"},
+      {report_arguments(dataset(), report_dir(), " --seed 2"), "/estimate/seed"}};
   for (const auto& [arguments, difference] : cases) {
     const CommandRun refused = run(arguments);
     EXPECT_EQ(refused.exit_code, 2) << arguments << "\n" << refused.errors;
@@ -441,11 +441,16 @@ TEST_F(ReportCli, ThresholdsRejectsBadValuesWithExitCode2) {
 
 TEST_F(ReportCli, ThresholdsOnAFolderWithoutEstimatesSaysWhatToRun) {
   // The visibility step's folder has objects.csv with visibility columns only.
-  for (const fs::path& dir : {report_dir() / "visibility", *root_ / "empty_folder"}) {
+  // The report's own step folder: the report folder holds what thresholds reads.
+  for (const auto& [dir, advice] :
+       {std::pair<fs::path, std::string>{
+            report_dir() / "visibility",
+            "run `clutterscope thresholds` on " + report_dir().string()},
+        std::pair<fs::path, std::string>{*root_ / "empty_folder", "clutterscope report"}}) {
     fs::create_directories(dir);
     const CommandRun refused = run("thresholds \"" + dir.string() + "\" --variance-cm2 0.25");
     EXPECT_EQ(refused.exit_code, 3) << dir << "\n" << refused.errors;
-    EXPECT_NE(refused.errors.find("clutterscope report"), std::string::npos) << refused.errors;
+    EXPECT_NE(refused.errors.find(advice), std::string::npos) << refused.errors;
   }
 }
 

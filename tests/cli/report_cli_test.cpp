@@ -34,7 +34,6 @@ TEST(ReportCli, TakesEveryOptionOfTheCommandsItRuns) {
     const std::set<std::string> step = options_of(command);
     ASSERT_TRUE(step.count("--out")) << command;
     for (const std::string& name : step) {
-      // --shard: a sharded report is made from merged step folders (report refuses it).
       EXPECT_TRUE(report.count(name)) << "report does not take " << command << "'s " << name;
     }
   }

@@ -49,6 +49,7 @@ TEST_F(SensorFitCli, RecoversTheSensorAGeneratedDatasetWasMadeWith) {
   EXPECT_EQ(fit["measured"]["images"], 6);
   EXPECT_EQ(fit["rows"].size(), 6u);
   EXPECT_TRUE(fit["all_agree"].get<bool>());
+  EXPECT_TRUE(fit["gl_renderer"].is_string()) << fit.dump();  // which rasteriser made it
   const auto other =
       run_merged("sensor-fit " + quoted(kSamples / "tray6") + " --sensor xtion --quiet");
   EXPECT_EQ(other.exit_code, 1) << other.output;

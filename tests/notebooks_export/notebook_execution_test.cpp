@@ -10,73 +10,21 @@
 #include <clutterscope/notebooks_export/notebook.hpp>
 #include <cstdlib>
 
+#include "jupyter_run.hpp"
 #include "notebooks_export/report_fixture.hpp"
 
 namespace clutterscope::notebooks_export {
 namespace {
 
+using clutterscope::testing::cell_by_id;
+using clutterscope::testing::find_python;
+using clutterscope::testing::hermetic_env;
+using clutterscope::testing::run_logged;
+using clutterscope::testing::shell_quote;
+using clutterscope::testing::stream_text;
 using nlohmann::json;
 using testing::read_text;
 using testing::TemporaryDirectory;
-
-std::string shell_quote(const std::string& text) {
-  std::string quoted = "'";
-  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return quoted + "'";
-}
-
-// Runs a shell command with its output in `log`; returns the exit status (-1 if it died).
-int run(const std::string& command, const std::filesystem::path& log) {
-  const int status = std::system((command + " > " + shell_quote(log.string()) + " 2>&1").c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-// The Python that has nbformat: Debian's, which the Jupyter packages are installed for (a
-// pyenv or venv python3 earlier on PATH usually lacks them).
-std::string find_python(const std::filesystem::path& scratch) {
-  for (const std::string candidate : {"/usr/bin/python3", "python3"}) {
-    if (run(candidate + " -c 'import nbformat'", scratch / "probe.log") == 0) return candidate;
-  }
-  return "";
-}
-
-// Everything Jupyter, IPython and matplotlib write or read per user goes under `home`, so the
-// test neither depends on nor changes the user's configuration.
-std::string hermetic_env(const std::filesystem::path& home) {
-  std::string env = "env -u JUPYTER_PATH -u JUPYTER_CONFIG_PATH -u PYTHONPATH";
-  for (const auto& [name, sub] :
-       std::vector<std::pair<std::string, std::string>>{{"HOME", ""},
-                                                        {"JUPYTER_CONFIG_DIR", "jupyter-config"},
-                                                        {"JUPYTER_DATA_DIR", "jupyter-data"},
-                                                        {"JUPYTER_RUNTIME_DIR", "jupyter-runtime"},
-                                                        {"IPYTHONDIR", "ipython"},
-                                                        {"MPLCONFIGDIR", "matplotlib"},
-                                                        {"XDG_CACHE_HOME", "cache"}}) {
-    env += " " + name + "=" + shell_quote((home / sub).string());
-  }
-  return env + " MPLBACKEND=Agg PYDEVD_DISABLE_FILE_VALIDATION=1 PYTHONDONTWRITEBYTECODE=1";
-}
-
-const json& cell_by_id(const json& notebook, const std::string& id) {
-  for (const json& cell : notebook["cells"]) {
-    if (cell["id"] == id) return cell;
-  }
-  throw std::runtime_error("no cell " + id);
-}
-
-std::string stream_text(const json& cell, const std::string& stream = "stdout") {
-  std::string text;
-  for (const json& output : cell["outputs"]) {
-    if (output["output_type"] != "stream" || output["name"] != stream) continue;
-    const json& lines = output["text"];
-    if (lines.is_string()) {
-      text += lines.get<std::string>();
-    } else {
-      for (const json& line : lines) text += line.get<std::string>();
-    }
-  }
-  return text;
-}
 
 int png_outputs(const json& cell) {
   int count = 0;
@@ -169,7 +117,8 @@ TEST(NotebookExecution, ValidatesAndRunsHeadlessWithEveryFigureAndTheRightNumber
       "    with open(path, encoding='utf-8') as f:\n"
       "        assert f.read() == nbformat.writes(notebook) + '\\n', path + ' differs'\n";
   const std::filesystem::path validate_log = root.path() / "validate.log";
-  ASSERT_EQ(run(env + " " + python + " -c " + shell_quote(validate) + paths, validate_log), 0)
+  ASSERT_EQ(run_logged(env + " " + python + " -c " + shell_quote(validate) + paths, validate_log),
+            0)
       << read_text(validate_log);
 
   // Headless execution, started from another folder: Jupyter runs each notebook in its own
@@ -179,7 +128,7 @@ TEST(NotebookExecution, ValidatesAndRunsHeadlessWithEveryFigureAndTheRightNumber
                               " jupyter nbconvert --to notebook --execute "
                               "--ExecutePreprocessor.timeout=120" +
                               paths;
-  ASSERT_EQ(run(execute, execute_log), 0) << read_text(execute_log);
+  ASSERT_EQ(run_logged(execute, execute_log), 0) << read_text(execute_log);
 
   std::string executed_paths;
   std::vector<json> executed;
@@ -191,11 +140,11 @@ TEST(NotebookExecution, ValidatesAndRunsHeadlessWithEveryFigureAndTheRightNumber
     executed.push_back(json::parse(read_text(output)));
   }
   const std::filesystem::path revalidate_log = root.path() / "revalidate.log";
-  EXPECT_EQ(run(env + " " + python +
-                    " -c 'import nbformat, sys\nfor p in sys.argv[1:]: "
-                    "nbformat.validate(nbformat.read(p, as_version=4))'" +
-                    executed_paths,
-                revalidate_log),
+  EXPECT_EQ(run_logged(env + " " + python +
+                           " -c 'import nbformat, sys\nfor p in sys.argv[1:]: "
+                           "nbformat.validate(nbformat.read(p, as_version=4))'" +
+                           executed_paths,
+                       revalidate_log),
             0)
       << read_text(revalidate_log);
 

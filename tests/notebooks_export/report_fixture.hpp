@@ -41,7 +41,7 @@ struct ThresholdCheck {
   double precision = 0.0;  // NaN when undefined
   double recall = 0.0;
   double f1 = 0.0;
-  int accepted_below_cutoff = 0;  // confident estimates of objects below the cutoff
+  int accepted_below_cutoff = 0;  // confident estimates with an error of objects below the cutoff
 };
 
 // Written from the definitions (issue 6 item 3), independently of the notebook's Python.

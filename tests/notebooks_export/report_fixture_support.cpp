@@ -125,8 +125,9 @@ ThresholdCheck check_threshold(const std::vector<FixtureObject>& objects, double
   for (const FixtureObject& o : objects) {
     if (!o.variances_cm2) continue;
     const bool confident = max_variance(o) <= threshold_cm2;
-    if (confident && o.visib_fract < visibility_cutoff) ++check.accepted_below_cutoff;
+    // As the report counts: over the estimates with a measured error.
     if (!o.err_cm) continue;
+    if (confident && o.visib_fract < visibility_cutoff) ++check.accepted_below_cutoff;
     const bool accurate = *o.err_cm <= accurate_cm;
     check.confident += confident ? 1 : 0;
     check.accurate += accurate ? 1 : 0;

@@ -1,5 +1,5 @@
 // The report pipeline with fake steps (no GL): options are checked before any step runs, the
-// folder's job fingerprint keys the steps' options as given, and a folder of another job is
+// folder's job fingerprint holds the steps' resolved options, and a folder of another job is
 // refused.
 
 #include <gtest/gtest.h>
@@ -45,7 +45,7 @@ TEST(ReportJob, InvalidOptionsAreRefusedBeforeAnyStep) {
   const fs::path root = testing::fresh_dir("report_job_invalid");
   CountingSteps counting;
   ReportJobOptions sharded = options_into(root);
-  sharded.dataset.shard = "0/2";
+  sharded.dataset.shard = "2/2";
   EXPECT_THROW(run_report(sharded, counting.steps()), batch::UsageError);
   ReportJobOptions bad_analysis = options_into(root);
   bad_analysis.analysis.accurate_cm = -1.0;
@@ -56,31 +56,37 @@ TEST(ReportJob, InvalidOptionsAreRefusedBeforeAnyStep) {
   EXPECT_FALSE(fs::exists(root / "report"));
 }
 
-TEST(ReportJob, FingerprintKeysTheGivenOptionsInCanonicalForm) {
-  ReportJobOptions options = options_into(testing::fresh_dir("report_job_fingerprint"));
-  options.visibility_given = {{"--delta-mm", "15.0"}, {"--masks", ""}};
-  options.estimate_given = {{"--particles", "40"}};
-  const nlohmann::json fingerprint = report_fingerprint(options);
+TEST(ReportJob, FingerprintHoldsTheStepsResolvedOptionsWithoutTheDataset) {
+  const ReportJobOptions options = options_into(testing::fresh_dir("report_job_fingerprint"));
+  ReportSteps steps;
+  steps.visibility_options = batch::dataset_fingerprint(options.dataset);
+  steps.visibility_options["mode"] = "rendered";
+  steps.estimate_options = batch::dataset_fingerprint(options.dataset);
+  steps.estimate_options["particles"] = 100;
+  const nlohmann::json fingerprint = report_fingerprint(options, steps);
   EXPECT_EQ(fingerprint["command"], "report");
-  EXPECT_EQ(fingerprint["visibility"]["--delta-mm"], "15");
-  EXPECT_EQ(fingerprint["visibility"]["--masks"], "");
-  EXPECT_EQ(fingerprint["estimate"]["--particles"], "40");
-  EXPECT_EQ(fingerprint["estimate"]["--variance-threshold-cm2"], "0.25");
-  EXPECT_EQ(fingerprint["estimate"]["--seed"], "1");
-  EXPECT_FALSE(fingerprint["estimate"].contains("--confidence-radius-cm"));
+  EXPECT_EQ(fingerprint["dataset"], batch::dataset_fingerprint(options.dataset));
+  EXPECT_EQ(fingerprint["visibility"], (nlohmann::json{{"mode", "rendered"}}));
+  EXPECT_EQ(fingerprint["estimate"], (nlohmann::json{{"particles", 100}}));
+  // No --shard: the shards of a report are one job.
+  ReportJobOptions shard = options;
+  shard.dataset.shard = "1/2";
+  EXPECT_EQ(report_fingerprint(shard, steps), fingerprint);
 }
 
 TEST(ReportJob, AFolderOfAnotherJobIsRefusedOnceAStepStarted) {
   const fs::path root = testing::fresh_dir("report_job_other");
   ReportJobOptions options = options_into(root);
   const fs::path dir = options.dataset.out;
-  prepare_report_folder(dir, report_fingerprint(options));
+  CountingSteps counting;
+  ReportSteps steps = counting.steps();
+  steps.estimate_options = {{"particles", 100}};
+  prepare_report_folder(dir, report_fingerprint(options, steps));
   fs::create_directories(dir / "estimate" / ".batch");
   std::ofstream(dir / "estimate" / ".batch" / "job.json") << "{}\n";
-  options.estimate_given = {{"--particles", "40"}};
-  CountingSteps counting;
+  steps.estimate_options = {{"particles", 40}};
   try {
-    run_report(options, counting.steps());
+    run_report(options, steps);
     FAIL() << "accepted a folder of another job";
   } catch (const batch::UsageError& error) {
     EXPECT_NE(std::string(error.what()).find("holds a report of a different job"),

@@ -1,6 +1,8 @@
 #include <algorithm>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/input_digest.hpp>
+#include <clutterscope/batch/quantile.hpp>
+#include <clutterscope/batch/run_record.hpp>
 #include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
@@ -8,6 +10,7 @@
 #include <clutterscope/render/bop_renderer.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/renderer.hpp>
+#include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/visibility/overlay.hpp>
 #include <clutterscope/visibility/scene_gt_info.hpp>
 #include <clutterscope/visibility/visibility_job.hpp>
@@ -318,13 +321,14 @@ class VisibilityWorker {
   std::map<int, std::unique_ptr<render::BopModel>> bop_models_;
 };
 
-// Visibility distribution over all instances (and images), in constant memory: V_i is binned
-// at 1e-4 resolution for quantiles (exact to +-5e-5) and in tenths for the histogram.
+// Visibility distribution over all instances (and images): the values themselves for exact
+// quantiles (batch::linear_quantile, the report's and the notebook's definition; 8 bytes per
+// instance) and tenths for the histogram.
 class Distribution {
  public:
   void add(double value) {
     const double clamped = std::clamp(value, 0.0, 1.0);
-    ++fine_[std::min<std::size_t>(kFineBins - 1, static_cast<std::size_t>(clamped * kFineBins))];
+    values_.push_back(value);
     ++tenths_[std::min<std::size_t>(9, static_cast<std::size_t>(clamped * 10.0))];
     sum_ += value;
     ++count_;
@@ -346,7 +350,8 @@ class Distribution {
                                                                              {"p75", 0.75},
                                                                              {"p90", 0.90},
                                                                              {"p95", 0.95}}) {
-      quantiles[name] = count_ ? batch::json_rounded(quantile(q), 4) : nullptr;
+      quantiles[name] =
+          count_ ? batch::json_rounded(batch::linear_quantile(values_, q), 6) : nullptr;
     }
     json["quantiles"] = quantiles;
     json["histogram"] = {{"bin_edges", {0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 1.0}},
@@ -360,19 +365,7 @@ class Distribution {
   }
 
  private:
-  static constexpr std::size_t kFineBins = 10000;
-  // The centre of the fine bin holding the value of rank ceil(q n) (1-based).
-  double quantile(double q) const {
-    const std::int64_t rank =
-        std::max<std::int64_t>(1, static_cast<std::int64_t>(std::ceil(q * count_)));
-    std::int64_t seen = 0;
-    for (std::size_t bin = 0; bin < kFineBins; ++bin) {
-      seen += fine_[bin];
-      if (seen >= rank) return (static_cast<double>(bin) + 0.5) / kFineBins;
-    }
-    return 1.0;
-  }
-  std::vector<std::int64_t> fine_ = std::vector<std::int64_t>(kFineBins, 0);
+  std::vector<double> values_;
   std::vector<std::int64_t> tenths_ = std::vector<std::int64_t>(10, 0);
   double sum_ = 0.0;
   std::int64_t count_ = 0, below_10_ = 0, below_30_ = 0, zero_ = 0, one_ = 0;
@@ -512,6 +505,20 @@ bool VisibilityJobOptions::IsValid(std::string* why) const {
   return depth.IsValid(why);
 }
 
+nlohmann::json visibility_job_fingerprint(const VisibilityJobOptions& options) {
+  nlohmann::json fingerprint = batch::dataset_fingerprint(options.dataset);
+  fingerprint["mode"] = to_string(options.visibility.mode);
+  if (options.visibility.is_bop()) {
+    fingerprint["delta_mm"] = options.visibility.delta_mm;
+    batch::add_depth_check_fingerprint(options.depth, &fingerprint);
+  }
+  fingerprint["pixel_center"] = pixel_center_name(options.visibility.pixel_center);
+  fingerprint["write_bop_info"] = options.write_bop_info;
+  fingerprint["masks"] = options.masks;
+  fingerprint["overlays"] = options.overlays;
+  return fingerprint;
+}
+
 batch::BatchResult run_visibility_job(const VisibilityJobOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw batch::UsageError(why);
@@ -519,17 +526,8 @@ batch::BatchResult run_visibility_job(const VisibilityJobOptions& options) {
   const batch::BatchOutputSpec output = visibility_output_spec();
   batch::BatchJob job;
   job.output = &output;
-  job.items = dataset.list_images(batch::selection_of(options.dataset));
-  job.fingerprint = batch::dataset_fingerprint(options.dataset);
-  job.fingerprint["mode"] = to_string(options.visibility.mode);
-  if (options.visibility.is_bop()) {
-    job.fingerprint["delta_mm"] = options.visibility.delta_mm;
-    batch::add_depth_check_fingerprint(options.depth, &job.fingerprint);
-  }
-  job.fingerprint["pixel_center"] = pixel_center_name(options.visibility.pixel_center);
-  job.fingerprint["write_bop_info"] = options.write_bop_info;
-  job.fingerprint["masks"] = options.masks;
-  job.fingerprint["overlays"] = options.overlays;
+  job.items = batch::list_selected_images(dataset, options.dataset);
+  job.fingerprint = visibility_job_fingerprint(options);
   job.input_digest = batch::bop_image_digest(dataset);
   SharedModels models(dataset);
   job.make_worker = [&dataset, &options, &models]() -> batch::ItemFunction {
@@ -538,7 +536,10 @@ batch::BatchResult run_visibility_job(const VisibilityJobOptions& options) {
   };
   // Set before the workers create their GL contexts (see render/context.hpp).
   const render::WorkerRasterisationScope rasterisation;
-  return batch::run_batch(job, batch::batch_options_of(options.dataset, "visibility"));
+  const batch::BatchResult result =
+      batch::run_batch(job, batch::batch_options_of(options.dataset, "visibility"));
+  batch::record_renderer(options.dataset.out, render::renderer_in_use());
+  return result;
 }
 
 }  // namespace clutterscope::visibility

@@ -1,10 +1,12 @@
 #include <algorithm>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/input_digest.hpp>
+#include <clutterscope/batch/run_record.hpp>
 #include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/estimator/confidence.hpp>
 #include <clutterscope/render/context.hpp>
+#include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/report/calibration.hpp>
 #include <clutterscope/scene_estimation/estimate_job.hpp>
 #include <cmath>
@@ -327,6 +329,64 @@ batch::BatchOutputSpec estimate_output_spec() {
 
 bool EstimateJobOptions::IsValid(std::string* why) const { return estimate.IsValid(why); }
 
+nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
+                                        const datasets::BopDataset& dataset) {
+  nlohmann::json fingerprint = batch::dataset_fingerprint(options.dataset);
+  const EstimateOptions& e = options.estimate;
+  fingerprint["particles"] = e.particles;
+  fingerprint["iterations"] = e.iterations;
+  fingerprint["gibbs_sweeps"] = e.gibbs_sweeps;
+  fingerprint["icp_samples"] = e.icp_samples;
+  fingerprint["variance_threshold_cm2"] = e.variance_threshold_cm2;
+  if (e.confidence_radius_cm) fingerprint["confidence_radius_cm"] = *e.confidence_radius_cm;
+  fingerprint["seed"] = e.seed;
+  fingerprint["detections"] =
+      options.detections.empty() ? "" : fs::absolute(options.detections).string();
+  fingerprint["save_beliefs"] = options.save_beliefs;
+  fingerprint["no_time"] = options.no_time;
+  fingerprint["unary_lambda"] = e.unary_lambda;
+  fingerprint["unary_truncation_mm"] = 1e3 * e.unary_truncation_m;
+  fingerprint["grid_pixels"] = e.grid_pixels;
+  fingerprint["proxy_triangles"] = e.proxy_triangles;
+  fingerprint["proxy_tolerance_mm"] = 1e3 * e.proxy_tolerance_m;
+  fingerprint["bandwidth_floor_mm"] = 1e3 * e.min_bandwidth_m;
+  fingerprint["icp_max_distance_mm"] = 1e3 * e.icp_max_distance_m;
+  // Always recorded: folders of earlier runs, which used aabb without saying so, do not resume.
+  fingerprint["non_contact"] = to_string(e.non_contact);
+  if (!e.non_contact_edges) fingerprint["non_contact_edges"] = false;
+  if (!e.support_edges) fingerprint["support_edges"] = false;
+  // The belief proposal and covariance of this version: always recorded, so that folders of
+  // earlier estimators (untempered product proposals, spread-only variances) do not resume.
+  fingerprint["belief_proposal"] = e.adaptive_belief_proposal ? "adaptive" : "product";
+  fingerprint["min_ess_fraction"] = e.min_effective_sample_fraction;
+  fingerprint["correlated_pixels"] = e.correlated_pixels;
+  // Always recorded (resolved): estimates of earlier versions assumed none.
+  const ModelMisfit misfit = resolve_model_misfit(e, dataset);
+  fingerprint["model_misfit_mm"] = 1e3 * misfit.translation_m;
+  fingerprint["model_misfit_deg"] = misfit.rotation_deg;
+  fingerprint["model_misfit_source"] = misfit.source;
+  fingerprint["max_seen_through"] = e.max_seen_through;
+  fingerprint["max_belief_shift"] = e.max_belief_shift;
+  // Defaults add nothing, so that folders of earlier runs keep resuming.
+  const datasets::DetectorOptions default_detector;
+  if (!e.detector.amodal_boxes) fingerprint["amodal_boxes"] = false;
+  if (e.detector.amodal_score != default_detector.amodal_score)
+    fingerprint["amodal_score"] = e.detector.amodal_score;
+  if (e.detector.amodal_jitter != default_detector.amodal_jitter)
+    fingerprint["amodal_jitter"] = e.detector.amodal_jitter;
+  if (e.detector.amodal_below_visibility != default_detector.amodal_below_visibility)
+    fingerprint["amodal_below_visibility"] = e.detector.amodal_below_visibility;
+  if (e.amodal_below_score) fingerprint["amodal_below_score"] = *e.amodal_below_score;
+  if (e.observation == Observation::kSynthetic) {
+    fingerprint["observation"] = to_string(e.observation);
+    // Default sensor adds nothing, so that folders of earlier runs keep resuming.
+    if (e.sensor.preset != "default") fingerprint["sensor"] = datasets::to_json(e.sensor);
+  } else {
+    batch::add_depth_check_fingerprint(e.depth, &fingerprint);
+  }
+  return fingerprint;
+}
+
 batch::BatchResult run_estimate_job(const EstimateJobOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw batch::UsageError(why);
@@ -334,63 +394,11 @@ batch::BatchResult run_estimate_job(const EstimateJobOptions& options) {
   job_options.estimate.keep_history = options.save_beliefs;
   datasets::BopDataset dataset = batch::open_dataset(job_options.dataset);
   if (!job_options.detections.empty()) dataset.attach_detections(job_options.detections);
-  const EstimateOptions& e = job_options.estimate;
   batch::BatchJob job;
   const batch::BatchOutputSpec output = estimate_output_spec();
   job.output = &output;
-  job.items = dataset.list_images(batch::selection_of(job_options.dataset));
-  job.fingerprint = batch::dataset_fingerprint(job_options.dataset);
-  job.fingerprint["particles"] = e.particles;
-  job.fingerprint["iterations"] = e.iterations;
-  job.fingerprint["gibbs_sweeps"] = e.gibbs_sweeps;
-  job.fingerprint["icp_samples"] = e.icp_samples;
-  job.fingerprint["variance_threshold_cm2"] = e.variance_threshold_cm2;
-  if (e.confidence_radius_cm) job.fingerprint["confidence_radius_cm"] = *e.confidence_radius_cm;
-  job.fingerprint["seed"] = e.seed;
-  job.fingerprint["detections"] =
-      job_options.detections.empty() ? "" : fs::absolute(job_options.detections).string();
-  job.fingerprint["save_beliefs"] = job_options.save_beliefs;
-  job.fingerprint["no_time"] = job_options.no_time;
-  job.fingerprint["unary_lambda"] = e.unary_lambda;
-  job.fingerprint["unary_truncation_mm"] = 1e3 * e.unary_truncation_m;
-  job.fingerprint["grid_pixels"] = e.grid_pixels;
-  job.fingerprint["proxy_triangles"] = e.proxy_triangles;
-  job.fingerprint["proxy_tolerance_mm"] = 1e3 * e.proxy_tolerance_m;
-  job.fingerprint["bandwidth_floor_mm"] = 1e3 * e.min_bandwidth_m;
-  job.fingerprint["icp_max_distance_mm"] = 1e3 * e.icp_max_distance_m;
-  // Always recorded: folders of earlier runs, which used aabb without saying so, do not resume.
-  job.fingerprint["non_contact"] = to_string(e.non_contact);
-  if (!e.non_contact_edges) job.fingerprint["non_contact_edges"] = false;
-  if (!e.support_edges) job.fingerprint["support_edges"] = false;
-  // The belief proposal and covariance of this version: always recorded, so that folders of
-  // earlier estimators (untempered product proposals, spread-only variances) do not resume.
-  job.fingerprint["belief_proposal"] = e.adaptive_belief_proposal ? "adaptive" : "product";
-  job.fingerprint["min_ess_fraction"] = e.min_effective_sample_fraction;
-  job.fingerprint["correlated_pixels"] = e.correlated_pixels;
-  // Always recorded (resolved): estimates of earlier versions assumed none.
-  const ModelMisfit misfit = resolve_model_misfit(e, dataset);
-  job.fingerprint["model_misfit_mm"] = 1e3 * misfit.translation_m;
-  job.fingerprint["model_misfit_deg"] = misfit.rotation_deg;
-  job.fingerprint["model_misfit_source"] = misfit.source;
-  job.fingerprint["max_seen_through"] = e.max_seen_through;
-  job.fingerprint["max_belief_shift"] = e.max_belief_shift;
-  // Defaults add nothing, so that folders of earlier runs keep resuming.
-  const datasets::DetectorOptions default_detector;
-  if (!e.detector.amodal_boxes) job.fingerprint["amodal_boxes"] = false;
-  if (e.detector.amodal_score != default_detector.amodal_score)
-    job.fingerprint["amodal_score"] = e.detector.amodal_score;
-  if (e.detector.amodal_jitter != default_detector.amodal_jitter)
-    job.fingerprint["amodal_jitter"] = e.detector.amodal_jitter;
-  if (e.detector.amodal_below_visibility != default_detector.amodal_below_visibility)
-    job.fingerprint["amodal_below_visibility"] = e.detector.amodal_below_visibility;
-  if (e.amodal_below_score) job.fingerprint["amodal_below_score"] = *e.amodal_below_score;
-  if (e.observation == Observation::kSynthetic) {
-    job.fingerprint["observation"] = to_string(e.observation);
-    // Default sensor adds nothing, so that folders of earlier runs keep resuming.
-    if (e.sensor.preset != "default") job.fingerprint["sensor"] = datasets::to_json(e.sensor);
-  } else {
-    batch::add_depth_check_fingerprint(e.depth, &job.fingerprint);
-  }
+  job.items = batch::list_selected_images(dataset, job_options.dataset);
+  job.fingerprint = estimate_job_fingerprint(job_options, dataset);
   job.input_digest = batch::bop_image_digest(dataset);
   job.make_worker = [&dataset, &job_options]() -> batch::ItemFunction {
     auto worker = std::make_shared<EstimateWorker>(dataset, job_options);
@@ -398,7 +406,10 @@ batch::BatchResult run_estimate_job(const EstimateJobOptions& options) {
   };
   // Set before the workers create their GL contexts (see render/context.hpp).
   const render::WorkerRasterisationScope rasterisation;
-  return batch::run_batch(job, batch::batch_options_of(job_options.dataset, "estimate"));
+  const batch::BatchResult result =
+      batch::run_batch(job, batch::batch_options_of(job_options.dataset, "estimate"));
+  batch::record_renderer(job_options.dataset.out, render::renderer_in_use());
+  return result;
 }
 
 }  // namespace clutterscope::scene_estimation

@@ -25,16 +25,16 @@ int parse_id(const std::string& text, const std::string& option, const std::stri
 
 }  // namespace
 
-std::vector<int> parse_id_list(const std::string& text, const std::string& option) {
-  std::vector<int> ids;
-  if (text.empty()) return ids;
+IdSelection parse_id_selection(const std::string& text, const std::string& option) {
+  IdSelection selection;
+  if (text.empty()) return selection;
   std::size_t start = 0;
   while (start <= text.size()) {
     const std::size_t comma = std::min(text.find(',', start), text.size());
     const std::string token = text.substr(start, comma - start);
     const std::size_t dash = token.find('-');
     if (dash == std::string::npos) {
-      ids.push_back(parse_id(token, option, text));
+      selection.ids.push_back(parse_id(token, option, text));
     } else {
       const int first = parse_id(token.substr(0, dash), option, text);
       const int last = parse_id(token.substr(dash + 1), option, text);
@@ -42,9 +42,18 @@ std::vector<int> parse_id_list(const std::string& text, const std::string& optio
         throw UsageError(option + ": range '" + token + "' must be FIRST-LAST with FIRST <= LAST" +
                          " and at most " + std::to_string(kMaxRangeSpan) + " ids");
       }
-      for (int id = first; id <= last; ++id) ids.push_back(id);
+      selection.ranges.emplace_back(first, last);
     }
     start = comma + 1;
+  }
+  return selection;
+}
+
+std::vector<int> parse_id_list(const std::string& text, const std::string& option) {
+  const IdSelection selection = parse_id_selection(text, option);
+  std::vector<int> ids = selection.ids;
+  for (const auto& [first, last] : selection.ranges) {
+    for (int id = first; id <= last; ++id) ids.push_back(id);
   }
   std::sort(ids.begin(), ids.end());
   ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
@@ -62,6 +71,68 @@ std::string format_id_list(const std::vector<int>& ids) {
     first = last + 1;
   }
   return text;
+}
+
+std::vector<int> select_ids(const IdSelection& selection, const std::vector<int>& existing,
+                            const std::string& what, const std::filesystem::path& file) {
+  if (selection.selects_all()) return existing;
+  // The ids there are, at most about 60 characters of them.
+  const auto available = [&existing] {
+    const std::string all = format_id_list(existing);
+    if (all.size() <= 60) return all.empty() ? std::string("none") : all;
+    return all.substr(0, all.rfind(',', 60)) + ",... (" + std::to_string(existing.size()) + " ids)";
+  };
+  std::vector<int> chosen;
+  for (const int id : selection.ids) {
+    if (!std::binary_search(existing.begin(), existing.end(), id)) {
+      throw datasets::DatasetError(file, "unknown " + what + " " + std::to_string(id) +
+                                             " (there are " + what + "s " + available() + ")");
+    }
+    chosen.push_back(id);
+  }
+  for (const auto& [first, last] : selection.ranges) {
+    const auto begin = std::lower_bound(existing.begin(), existing.end(), first);
+    const auto end = std::upper_bound(existing.begin(), existing.end(), last);
+    if (begin == end) {
+      throw datasets::DatasetError(file, what + " range " + std::to_string(first) + "-" +
+                                             std::to_string(last) + " selects no " + what +
+                                             " (there are " + what + "s " + available() + ")");
+    }
+    chosen.insert(chosen.end(), begin, end);
+  }
+  std::sort(chosen.begin(), chosen.end());
+  chosen.erase(std::unique(chosen.begin(), chosen.end()), chosen.end());
+  return chosen;
+}
+
+std::vector<datasets::ImageKey> list_selected_images(const datasets::BopDataset& dataset,
+                                                     const DatasetOptions& options) {
+  datasets::DatasetSelection selection;
+  selection.splits = {split_folder(options)};
+  const fs::path split_path = fs::path(options.dataset) / selection.splits.front();
+  const IdSelection scenes = parse_id_selection(options.scenes, "--scenes");
+  if (!scenes.selects_all()) {
+    selection.scene_ids =
+        select_ids(scenes, dataset.scene_ids(selection.splits.front()), "scene", split_path);
+  }
+  const IdSelection images = parse_id_selection(options.images, "--images");
+  if (images.ranges.empty()) {
+    selection.image_ids = images.ids;  // each must exist: list_images names the missing one
+    return dataset.list_images(selection);
+  }
+  // Ranges select among the images the selected scenes have (and the targets keep).
+  std::vector<datasets::ImageKey> keys = dataset.list_images(selection);
+  std::vector<int> existing;
+  for (const datasets::ImageKey& key : keys) existing.push_back(key.im_id);
+  std::sort(existing.begin(), existing.end());
+  existing.erase(std::unique(existing.begin(), existing.end()), existing.end());
+  const std::vector<int> chosen = select_ids(images, existing, "image", split_path);
+  keys.erase(std::remove_if(keys.begin(), keys.end(),
+                            [&chosen](const datasets::ImageKey& key) {
+                              return !std::binary_search(chosen.begin(), chosen.end(), key.im_id);
+                            }),
+             keys.end());
+  return keys;
 }
 
 std::string split_folder(const DatasetOptions& options) {

@@ -5,7 +5,9 @@
 #include <clutterscope/cli/cli.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/render/context.hpp>
+#include <clutterscope/render/renderer_in_use.hpp>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -99,6 +101,44 @@ class HelpFormatter : public CLI::Formatter {
   }
 };
 
+// Exit codes 2-4 mean the same for every command; 0 and 1 are each command's own.
+constexpr const char* kCommonExitCodes =
+    "  2 usage error\n"
+    "  3 bad input data (the message names file, scene, image and field)\n"
+    "  4 rendering or runtime failure";
+
+// What exit codes 0 and 1 mean for `command` ("bench visibility" for a benchmark), one per line.
+std::string own_exit_codes(const std::string& command) {
+  const std::string failed_images =
+      "  0 ok\n  1 some images failed under --keep-going (listed in summary.json)\n";
+  static const std::map<std::string, std::string> codes = {
+      {"", "  0 ok\n  1 as the command's --help says\n"},
+      {"visibility", failed_images},
+      {"estimate", failed_images},
+      {"report", failed_images},
+      {"merge",
+       "  0 ok\n  1 the merged job holds images that failed under --keep-going (listed in "
+       "summary.json)\n"},
+      {"sensor-fit",
+       "  0 every statistic of the preset agrees within --tolerance\n"
+       "  1 some statistic is off by more than --tolerance (marked in the table)\n"}};
+  const auto found = codes.find(command);
+  return found == codes.end() ? "  0 ok\n" : found->second;
+}
+
+std::string exit_codes_footer(const std::string& command) {
+  return "Exit codes:\n" + own_exit_codes(command) + kCommonExitCodes;
+}
+
+// Each command's --help ends with its own exit codes.
+void describe_exit_codes(CLI::App& app, const std::string& prefix) {
+  for (CLI::App* command : app.get_subcommands({})) {
+    const std::string name = prefix + command->get_name();
+    command->footer(exit_codes_footer(name));
+    describe_exit_codes(*command, name + " ");
+  }
+}
+
 void describe_app(CLI::App& app) {
   app.formatter(std::make_shared<HelpFormatter>());
   app.description(
@@ -106,10 +146,7 @@ void describe_app(CLI::App& app) {
       "Run `clutterscope COMMAND --help` for a command's options.");
   app.set_version_flag("--version", std::string("clutterscope ") + CLUTTERSCOPE_VERSION);
   app.require_subcommand(1);
-  app.footer(
-      "Exit codes: 0 ok, 1 some images failed under --keep-going (listed in summary.json),\n"
-      "2 usage error, 3 bad input data (the message names file, scene, image and field),\n"
-      "4 rendering or runtime failure.");
+  app.footer(exit_codes_footer(""));
   app.get_formatter()->column_width(28);
 }
 
@@ -134,12 +171,41 @@ CLI::App& bench_command_group(CLI::App& app) {
   return *bench;
 }
 
+namespace {
+
+// The command that ran (the leaf: `bench visibility`'s visibility), nullptr before parsing.
+const CLI::App* command_run(const CLI::App& app) {
+  const auto parsed = app.get_subcommands();
+  if (parsed.empty()) return nullptr;
+  const CLI::App* deeper = command_run(*parsed.front());
+  return deeper != nullptr ? deeper : parsed.front();
+}
+
+// Every command that rendered says with what on stderr, unless -q: results differ between
+// rasterisers (llvmpipe, a GPU driver). run.json of the batch commands and report records it.
+void print_renderer(const CLI::App& app) {
+  const std::string renderer = render::renderer_in_use();
+  const CLI::App* command = command_run(app);
+  if (renderer.empty() || command == nullptr) return;
+  const CLI::Option* quiet = command->get_option_no_throw("--quiet");
+  if (quiet != nullptr && quiet->count() > 0) return;
+  std::cerr << command->get_name() << ": GL renderer " << renderer << "\n";
+}
+
+}  // namespace
+
 int run_cli(int argc, char** argv) {
   CLI::App app;
   describe_app(app);
   int exit_code = 0;
   add_commands(app, &exit_code);
+  describe_exit_codes(app, "");
 
+  // On every way out: a run that failed may have rendered too.
+  struct PrintRenderer {
+    const CLI::App& app;
+    ~PrintRenderer() { print_renderer(app); }
+  } print_renderer_on_exit{app};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

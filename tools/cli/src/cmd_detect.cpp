@@ -40,7 +40,9 @@ void run_detect(const DetectArguments& arguments) {
   const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
   datasets::DatasetSelection selection;
   selection.splits = {arguments.split};
-  selection.scene_ids = parse_id_list(arguments.scenes, "--scenes");
+  selection.scene_ids = batch::select_ids(
+      batch::parse_id_selection(arguments.scenes, "--scenes"), dataset.scene_ids(arguments.split),
+      "scene", std::filesystem::path(arguments.dataset) / arguments.split);
   const std::vector<datasets::ImageKey> keys = dataset.list_images(selection);
   std::vector<int> category_ids;
   const datasets::GraphInferenceOptions graph_options;

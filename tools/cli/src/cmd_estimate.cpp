@@ -48,6 +48,10 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
   command.add_option_function<double>(
       "--bandwidth-floor-mm", [&e](double mm) { e.min_bandwidth_m = 1e-3 * mm; },
       "floor of the kernel standard deviation of messages and beliefs (mm, default 5)");
+  command.add_option_function<double>(
+      "--icp-max-distance-mm", [&e](double mm) { e.icp_max_distance_m = 1e-3 * mm; },
+      "ICP post-processing: measured points farther than this from the model are not matched "
+      "(mm, > 0, default 10)");
   command
       .add_option("--max-seen-through", e.max_seen_through,
                   "consistency check: an ICP-refined estimate is confident only if the sensor sees "

@@ -33,8 +33,9 @@ void run_graph(const GraphArguments& arguments) {
   std::string why;
   if (!options.IsValid(&why)) throw batch::UsageError(why);
   const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
-  std::vector<int> scene_ids = parse_id_list(arguments.scenes, "--scenes");
-  if (scene_ids.empty()) scene_ids = dataset.scene_ids(arguments.split);
+  const std::vector<int> scene_ids = batch::select_ids(
+      batch::parse_id_selection(arguments.scenes, "--scenes"), dataset.scene_ids(arguments.split),
+      "scene", std::filesystem::path(arguments.dataset) / arguments.split);
   std::map<datasets::GravitySource, int> sources;
   nlohmann::ordered_json printed;
   for (const int scene_id : scene_ids) {

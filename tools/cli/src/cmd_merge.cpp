@@ -1,6 +1,11 @@
+#include <algorithm>
 #include <clutterscope/batch/batch.hpp>
+#include <clutterscope/batch/output_folder.hpp>
+#include <clutterscope/report/report_job.hpp>
 #include <clutterscope/scene_estimation/estimate_job.hpp>
 #include <clutterscope/visibility/visibility_job.hpp>
+#include <filesystem>
+#include <iostream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -20,7 +25,9 @@ void add_merge_command(CLI::App& app, int* exit_code) {
       "merge",
       "Combine the output folders of a batch command run with --shard I/N into one folder whose "
       "files are byte-identical to a single unsharded run. The folders must hold the same job "
-      "(same command, dataset, options and tool version); missing images are reported.");
+      "(same command, dataset, options and tool version); missing images are reported. Report "
+      "folders run with `report --shard I/N` are merged likewise (their visibility/ and "
+      "estimate/ steps); run the report command without --shard into the merged folder then.");
   command->add_option("DIR", arguments->inputs, "shard output folders (each holds .batch/)")
       ->type_name("")
       ->required()
@@ -36,7 +43,21 @@ void add_merge_command(CLI::App& app, int* exit_code) {
     options.outputs = {visibility::visibility_output_spec(),
                        scene_estimation::estimate_output_spec()};
     options.quiet = arguments->quiet;
-    *exit_code = batch::merge_batches(options).exit_code();
+    const bool reports = std::any_of(options.inputs.begin(), options.inputs.end(),
+                                     [](const std::filesystem::path& input) {
+                                       const auto owner = batch::folder_owner(input);
+                                       return owner && owner->command == "report";
+                                     });
+    if (!reports) {
+      *exit_code = batch::merge_batches(options).exit_code();
+      return;
+    }
+    *exit_code = report::merge_report_shards(options).exit_code();
+    if (!options.quiet) {
+      std::cerr << "merged the report shards into " << options.out_dir.string()
+                << ": run the report command of the shards without --shard into it to write "
+                   "the report (every image is reused)\n";
+    }
   });
 }
 

@@ -2,6 +2,7 @@
 
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/notebooks_export/notebook.hpp>
+#include <clutterscope/report/report.hpp>
 #include <iostream>
 #include <memory>
 
@@ -30,7 +31,10 @@ void run_notebook_command(const NotebookCommandOptions& options) {
               << "\n";
   } catch (const notebooks_export::NotebookError& error) {
     if (error.kind() == notebooks_export::NotebookError::Kind::kMissingReport) {
-      throw datasets::DatasetError(error.file(), error.message());
+      // The advice names an --out that `report` accepts (the library cannot know the owners).
+      throw datasets::DatasetError(error.file(),
+                                   "not found; the notebook reads a report folder: " +
+                                       report::report_advice(options.report_dir, "notebook"));
     }
     throw;
   }

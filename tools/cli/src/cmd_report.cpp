@@ -2,13 +2,16 @@
 // jobs' Options -> report::run_report (report/report_job.hpp), which calls the jobs bound here.
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/cli/dataset_options.hpp>
+#include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/report/report_job.hpp>
 #include <filesystem>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -18,70 +21,72 @@ namespace clutterscope::cli {
 
 namespace {
 
-// An option of a step that report forwards when given. Its default and validation are the
-// step's own (`clutterscope STEP --help`), checked before either step starts.
+// An option of a step that report forwards when given: its name, help, default and
+// validation are the step's own definition (add_visibility_options, add_estimate_options), so
+// `report --help` lists exactly what the steps take.
 struct StepOption {
-  const char* step;  // "visibility", "estimate" or "both"
-  const char* name;
-  bool flag;
-  const char* help;
+  std::string step;  // "visibility", "estimate" or "both"
+  std::string name;  // "--mode"
+  bool flag = false;
+  std::string help;
+  std::string type_name;
+  std::string default_text;
 };
 
+// Options report sets itself (the dataset selection, and the estimator's threshold, radius and
+// seed, which are also the report's) or that make no sense for a step run by report.
+bool set_by_report(const std::string& name) {
+  static const std::set<std::string> names = {"--help",
+                                              "--split",
+                                              "--scenes",
+                                              "--images",
+                                              "--out",
+                                              "--jobs",
+                                              "--shard",
+                                              "--split-type",
+                                              "--models-dir",
+                                              "--targets",
+                                              "--keep-going",
+                                              "--quiet",
+                                              "--variance-threshold-cm2",
+                                              "--confidence-radius-cm",
+                                              "--seed"};
+  return names.count(name) > 0;
+}
+
+// The forwarded options, from the steps' definitions, in the steps' order (visibility first).
 const std::vector<StepOption>& step_options() {
-  static const std::vector<StepOption> options = {
-      {"visibility", "--mode", false, "visibility: rendered (Eq. 10, default), bop19 or bop18"},
-      {"visibility", "--delta-mm", false, "visibility, BOP modes: depth tolerance in mm"},
-      {"visibility", "--pixel-center", false, "visibility: half (default) or integer"},
-      {"visibility", "--write-bop-info", true,
-       "visibility: also write DIR/visibility/bop/SPLIT/SCENE/scene_gt_info.json"},
-      {"visibility", "--masks", true, "visibility: also write BOP masks"},
-      {"visibility", "--overlays", true, "visibility: also write overlay pictures"},
-      {"estimate", "--particles", false, "estimate: M, Gaussian components per message"},
-      {"estimate", "--iterations", false, "estimate: NBP iterations"},
-      {"estimate", "--gibbs-sweeps", false, "estimate: Gibbs sweeps per product"},
-      {"estimate", "--icp-samples", false, "estimate: K belief samples refined by ICP"},
-      {"estimate", "--detections", false, "estimate: BOP 2D detections JSON"},
-      {"estimate", "--unary-lambda", false, "estimate: lambda_r of Eq. 6"},
-      {"estimate", "--unary-truncation-mm", false, "estimate: truncation of the Eq. 6 unary"},
-      {"estimate", "--grid-pixels", false, "estimate: scoring grid size"},
-      {"estimate", "--proxy-triangles", false, "estimate: triangles of the scoring models"},
-      {"estimate", "--proxy-tolerance-mm", false,
-       "estimate: surface tolerance of the scoring models"},
-      {"estimate", "--bandwidth-floor-mm", false, "estimate: floor of the kernel bandwidth"},
-      {"estimate", "--min-ess-fraction", false, "estimate: adaptive tempering of the weights"},
-      {"estimate", "--non-contact", false, "estimate: oriented (default) or aabb boxes of Eq. 7"},
-      {"estimate", "--no-non-contact-edges", true, "estimate: ablation without non-contact edges"},
-      {"estimate", "--no-support-edges", true, "estimate: ablation without support edges"},
-      {"estimate", "--no-amodal", true, "estimate: no amodal boxes for hidden objects"},
-      {"estimate", "--amodal-score", false, "estimate: score of amodal boxes"},
-      {"estimate", "--amodal-jitter", false, "estimate: jitter of amodal boxes"},
-      {"estimate", "--amodal-below-visibility", false,
-       "estimate: amodal boxes also below this visibility"},
-      {"estimate", "--amodal-below-score", false,
-       "estimate: with --detections, objects whose boxes all score below this are hidden"},
-      {"estimate", "--correlated-pixels", false,
-       "estimate: calibrated covariance's pixel correlation"},
-      {"estimate", "--max-seen-through", false,
-       "estimate: consistency check, share of an estimate's pixels seen through"},
-      {"estimate", "--max-belief-shift", false,
-       "estimate: consistency check, ICP's shift from the belief"},
-      {"estimate", "--model-misfit-mm", false,
-       "estimate: per-axis sigma of the model's offset from the object (mm)"},
-      {"estimate", "--model-misfit-deg", false,
-       "estimate: per-axis sigma of the model's rotation against the object (degrees)"},
-      {"estimate", "--icp-max-distance-mm", false, "estimate: ICP correspondence distance"},
-      {"estimate", "--save-beliefs", true,
-       "estimate: also write the belief samples of every iteration"},
-      {"estimate", "--no-time", true,
-       "estimate: leave times empty, so every output is byte-reproducible"},
-      {"estimate", "--observation", false,
-       "estimate: measured (default; an image without depth fails) or synthetic"},
-      {"estimate", "--sensor", false, "estimate: sensor preset of --observation synthetic"},
-      {"both", "--depth-scale", false,
-       "visibility (BOP modes) and estimate: mm per depth PNG unit for every image"},
-      {"both", "--no-depth-check", true,
-       "visibility (BOP modes) and estimate: skip the measured-vs-GT depth-scale check"},
-  };
+  static const std::vector<StepOption> options = [] {
+    std::vector<StepOption> list;
+    VisibilityFlags visibility;
+    scene_estimation::EstimateJobOptions estimate;
+    CLI::App visibility_app, estimate_app;
+    add_visibility_options(visibility_app, &visibility);
+    add_estimate_options(estimate_app, &estimate);
+    for (const auto& [step, app] :
+         {std::pair<std::string, CLI::App*>{"visibility", &visibility_app},
+          {"estimate", &estimate_app}}) {
+      for (const CLI::Option* option : app->get_options()) {
+        if (option->get_lnames().empty()) continue;  // positional DATASET
+        const std::string name = "--" + option->get_lnames().front();
+        if (set_by_report(name)) continue;
+        const auto known = std::find_if(list.begin(), list.end(),
+                                        [&name](const StepOption& o) { return o.name == name; });
+        if (known != list.end()) {
+          known->step = "both";
+          continue;
+        }
+        list.push_back({step, name, option->get_expected_min() == 0,
+                        step + ": " + option->get_description(), option->get_type_name(),
+                        option->get_default_str()});
+      }
+    }
+    for (StepOption& option : list) {
+      if (option.step == "both")
+        option.help = "visibility and estimate: " + option.help.substr(option.help.find(": ") + 2);
+    }
+    return list;
+  }();
   return options;
 }
 
@@ -110,6 +115,7 @@ std::vector<std::string> step_command_line(const report::ReportJobOptions& optio
   std::vector<std::string> line = {
       step,      dataset.dataset, "--out",  (std::filesystem::path(dataset.out) / step).string(),
       "--split", dataset.split,   "--jobs", std::to_string(dataset.jobs)};
+  if (!dataset.shard.empty()) line.insert(line.end(), {"--shard", dataset.shard});
   if (!dataset.scenes.empty()) line.insert(line.end(), {"--scenes", dataset.scenes});
   if (!dataset.images.empty()) line.insert(line.end(), {"--images", dataset.images});
   append_dataset_layout_options(dataset, &line);
@@ -146,16 +152,28 @@ void parse_step_flags(const std::vector<std::string>& command_line,
 // bound to them.
 class BoundSteps {
  public:
+  // Parses and validates both steps' options and reads the dataset selection (its scenes,
+  // images, targets and detections), throwing before anything is written.
   explicit BoundSteps(const report::ReportJobOptions& options) {
     parse_step_flags(step_command_line(options, "estimate"), &add_estimate_options, &estimate_);
     VisibilityFlags visibility;
     parse_step_flags(step_command_line(options, "visibility"), &add_visibility_options,
                      &visibility);
     visibility_ = visibility.options();
+    std::string why;
+    if (!visibility_.IsValid(&why) || !estimate_.IsValid(&why)) throw batch::UsageError(why);
+    datasets::BopDataset dataset = batch::open_dataset(options.dataset);
+    if (!estimate_.detections.empty()) dataset.attach_detections(estimate_.detections);
+    batch::list_selected_images(dataset, options.dataset);
+    visibility_fingerprint_ = visibility::visibility_job_fingerprint(visibility_);
+    estimate_fingerprint_ = scene_estimation::estimate_job_fingerprint(estimate_, dataset);
   }
 
   report::ReportSteps steps() const {
     report::ReportSteps steps;
+    steps.renderer = render::renderer_in_use;
+    steps.visibility_options = visibility_fingerprint_;
+    steps.estimate_options = estimate_fingerprint_;
     steps.visibility = [this](const std::filesystem::path& out) {
       visibility::VisibilityJobOptions job = visibility_;
       job.dataset.out = out.string();
@@ -183,6 +201,7 @@ class BoundSteps {
  private:
   scene_estimation::EstimateJobOptions estimate_;
   visibility::VisibilityJobOptions visibility_;
+  nlohmann::json visibility_fingerprint_, estimate_fingerprint_;
 };
 
 struct ReportCommandState {
@@ -197,7 +216,7 @@ void run_report_command(CLI::App& command, ReportCommandState& state, int* exit_
   options.notebook = !state.no_notebook;
   for (const StepOption& option : step_options()) {
     if (command.get_option(option.name)->count() == 0) continue;
-    const std::string step = option.step;
+    const std::string& step = option.step;
     const std::string value = option.flag ? "" : state.values[option.name];
     if (step != "visibility") options.estimate_given[option.name] = value;
     if (step != "estimate") options.visibility_given[option.name] = value;
@@ -208,7 +227,11 @@ void run_report_command(CLI::App& command, ReportCommandState& state, int* exit_
   const BoundSteps steps(options);
   // Each step's runner reports its computed and reused images on stderr (and in run.json).
   const report::ReportRun run = report::run_report(options, steps.steps());
-  std::cout << run.files.report_html.string() << "\n" << run.console_summary;
+  if (run.shard_only) {
+    std::cerr << run.console_summary;
+  } else {
+    std::cout << run.files.report_html.string() << "\n" << run.console_summary;
+  }
   *exit_code = run.exit_code;
 }
 
@@ -223,7 +246,10 @@ void add_report_command(CLI::App& app, int* exit_code) {
       "DIR/estimate (finished images are reused, so an interrupted report resumes), then writes "
       "objects.csv, images.csv, summary.json, report.html, plots/ and clutter_report.ipynb "
       "into DIR and prints the path of report.html and a five-line summary. A folder holding a "
-      "report of another dataset or other options is refused.");
+      "report of another dataset or other options is refused. With --shard I/N both steps run "
+      "on the shard only and no report is written: run every shard (into DIR, or into separate "
+      "folders combined with `clutterscope merge SHARD_DIR... --out DIR`), then the same "
+      "command without --shard into DIR reuses every image and writes the report.");
   add_dataset_options(*command, &options.dataset);
   report::ReportOptions& analysis = options.analysis;
   command
@@ -254,7 +280,9 @@ void add_report_command(CLI::App& app, int* exit_code) {
     if (option.flag) {
       command->add_flag(option.name, state->flags[option.name], option.help);
     } else {
-      command->add_option(option.name, state->values[option.name], option.help)->type_name("VALUE");
+      command->add_option(option.name, state->values[option.name], option.help)
+          ->type_name(option.type_name.empty() ? "VALUE" : option.type_name)
+          ->default_str(option.default_text);
     }
   }
   command->callback(

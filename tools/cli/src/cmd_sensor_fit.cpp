@@ -15,6 +15,7 @@
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/model_cache.hpp>
 #include <clutterscope/render/renderer.hpp>
+#include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/scene_estimation/synthetic_view.hpp>
 #include <cmath>
 #include <cstdio>
@@ -88,7 +89,8 @@ int run_sensor_fit(const SensorFitArguments& arguments) {
   if (!(arguments.tolerance > 0)) throw batch::UsageError("--tolerance must be > 0");
   const datasets::SensorOptions sensor = arguments.sensor.resolve();
   const datasets::BopDataset dataset = open_dataset(arguments.dataset);
-  const std::vector<datasets::ImageKey> keys = dataset.list_images(selection_of(arguments.dataset));
+  const std::vector<datasets::ImageKey> keys =
+      batch::list_selected_images(dataset, arguments.dataset);
   if (keys.empty()) throw batch::UsageError("no images selected in " + arguments.dataset.dataset);
 
   const render::EglContext context = render::EglContext::create();
@@ -185,7 +187,8 @@ int run_sensor_fit(const SensorFitArguments& arguments) {
                                  {"measured", summary_json(m)},
                                  {"simulated", summary_json(s)},
                                  {"rows", rows},
-                                 {"all_agree", all_agree}};
+                                 {"all_agree", all_agree},
+                                 {"gl_renderer", render::renderer_in_use()}};
     datasets::write_file_atomically(arguments.json, json.dump(2) + "\n");
   }
   return all_agree ? 0 : 1;

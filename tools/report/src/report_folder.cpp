@@ -2,11 +2,15 @@
 // `clutterscope thresholds`.
 
 #include <algorithm>
+#include <clutterscope/batch/batch.hpp>
+#include <clutterscope/batch/output_folder.hpp>
 #include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/report/report.hpp>
 #include <fstream>
+#include <nlohmann/json.hpp>
+#include <optional>
 #include <stdexcept>
 
 namespace clutterscope::report {
@@ -19,7 +23,67 @@ bool valid_plot_name(const std::string& name) {
   });
 }
 
+// The dataset path recorded by the marker of `dir` (a report's or a batch job's), if any.
+std::optional<std::string> recorded_dataset(const std::filesystem::path& dir) {
+  for (const auto& [marker, pointer] :
+       {std::pair<const char*, const char*>{".report/job.json", "/dataset/dataset"},
+        {".batch/job.json", "/fingerprint/dataset"}}) {
+    std::ifstream in(dir / marker);
+    if (!in) continue;
+    const nlohmann::json json = nlohmann::json::parse(in, nullptr, false);
+    const nlohmann::json::json_pointer at(pointer);
+    if (json.is_object() && json.contains(at) && json.at(at).is_string()) {
+      return json.at(at).get<std::string>();
+    }
+  }
+  return std::nullopt;
+}
+
+bool report_may_write(const std::filesystem::path& dir) {
+  try {
+    batch::claim_output_folder(dir, "report");
+    return true;
+  } catch (const batch::UsageError&) {
+    return false;
+  }
+}
+
+// The folder `clutterscope report` should write for `dir` (see report_advice).
+std::filesystem::path advised_report_folder(const std::filesystem::path& dir) {
+  const std::filesystem::path absolute = std::filesystem::absolute(dir).lexically_normal();
+  for (std::filesystem::path above = absolute; !above.empty(); above = above.parent_path()) {
+    const std::optional<batch::FolderOwner> owner = batch::folder_owner(above);
+    if (owner && owner->command == "report") return above == absolute ? dir : above;
+    if (above == above.root_path()) break;
+  }
+  if (report_may_write(dir)) return dir;
+  std::filesystem::path base = dir;
+  if (base.filename().empty()) base = base.parent_path();  // "out/"
+  for (int suffix = 1; suffix <= 20; ++suffix) {
+    std::filesystem::path sibling = base;
+    sibling += suffix == 1 ? "_report" : "_report" + std::to_string(suffix);
+    if (report_may_write(sibling)) return sibling;
+  }
+  return "NEW_DIR";  // inside another command's results: no sibling will do
+}
+
 }  // namespace
+
+std::string report_advice(const std::filesystem::path& dir, const std::string& command) {
+  const std::filesystem::path out = advised_report_folder(dir);
+  const std::optional<batch::FolderOwner> owner = batch::folder_owner(out);
+  const bool is_report = owner && owner->command == "report";
+  if (is_report && out != dir &&
+      std::filesystem::exists(out / batch::report_objects_table().file_name)) {
+    return "this folder belongs to the report in " + out.string() + ": run `clutterscope " +
+           command + "` on " + out.string();
+  }
+  std::optional<std::string> dataset = recorded_dataset(out);
+  if (!dataset) dataset = recorded_dataset(dir);
+  return "run `clutterscope report " + dataset.value_or("DATASET") + " --out " + out.string() +
+         "`" + (is_report ? " (with the options the report was started with)" : "") +
+         " first, then `clutterscope " + command + "` on " + out.string();
+}
 
 ReportFiles write_report(const std::filesystem::path& dir, const std::vector<ObjectRow>& objects,
                          const ReportAnalysis& analysis, const std::vector<NamedPlot>& plots,
@@ -50,26 +114,19 @@ ReportFiles write_report(const std::filesystem::path& dir, const std::vector<Obj
 std::vector<ObjectRow> load_report_objects(const std::filesystem::path& dir) {
   const std::filesystem::path path = dir / batch::report_objects_table().file_name;
   if (!std::filesystem::exists(path)) {
-    throw datasets::DatasetError(path,
-                                 "no objects.csv in this folder: run `clutterscope report "
-                                 "DATASET --out " +
-                                     dir.string() + "` first");
+    throw datasets::DatasetError(
+        path, "no objects.csv in this folder: " + report_advice(dir, "thresholds"));
   }
   if (!objects_csv_has_estimates(path)) {
-    throw datasets::DatasetError(
-        path,
-        "objects.csv has visibility columns only, no estimates: run `clutterscope report "
-        "DATASET --out " +
-            dir.string() + "` (or `clutterscope estimate`) first");
+    throw datasets::DatasetError(path, "objects.csv has visibility columns only, no estimates: " +
+                                           report_advice(dir, "thresholds"));
   }
   std::vector<ObjectRow> objects = read_objects_csv(path);
   const bool any_estimate = std::any_of(objects.begin(), objects.end(),
                                         [](const ObjectRow& row) { return row.estimate; });
   if (!any_estimate) {
-    throw datasets::DatasetError(path,
-                                 "no object in objects.csv has an estimate: run "
-                                 "`clutterscope report DATASET --out " +
-                                     dir.string() + "` to estimate poses first");
+    throw datasets::DatasetError(
+        path, "no object in objects.csv has an estimate: " + report_advice(dir, "thresholds"));
   }
   return objects;
 }

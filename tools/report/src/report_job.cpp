@@ -2,6 +2,7 @@
 #include <chrono>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/output_folder.hpp>
+#include <clutterscope/batch/run_record.hpp>
 #include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
@@ -39,16 +40,16 @@ bool has_step_results(const fs::path& dir) {
   return false;
 }
 
-// "15", "15.0" and "1.5e1" are one number: they select the same job.
-std::string canonical_value(const std::string& value) {
-  try {
-    std::size_t used = 0;
-    const double number = std::stod(value, &used);
-    if (used == value.size()) return batch::format_shortest(number);
-  } catch (const std::exception&) {
-    // not a number: kept as typed
-  }
-  return value;
+// A marker of an earlier version recorded the options as typed ("--particles"), not resolved.
+bool has_resolved_options(const nlohmann::json& marker) {
+  return marker.is_object() && marker.contains("estimate") && marker["estimate"].is_object() &&
+         marker["estimate"].contains("particles");
+}
+
+// A step's fingerprint without the dataset selection, which the report records once.
+nlohmann::json step_options(nlohmann::json fingerprint, const nlohmann::json& dataset) {
+  for (const auto& [key, value] : dataset.items()) fingerprint.erase(key);
+  return fingerprint;
 }
 
 // What a step's job did, as its run.json records it (seconds to the millisecond).
@@ -128,7 +129,8 @@ void write_notebook(const fs::path& dir, const ReportOptions& analysis) {
 }
 
 // DIR/run.json: what this run did (times differ between runs, so they are kept here).
-void write_run_json(const fs::path& dir, const std::vector<StepRun>& steps, double seconds) {
+void write_run_json(const fs::path& dir, const std::vector<StepRun>& steps, double seconds,
+                    const std::string& renderer) {
   nlohmann::ordered_json run;
   run["command"] = "report";
   for (const StepRun& step : steps) {
@@ -140,6 +142,7 @@ void write_run_json(const fs::path& dir, const std::vector<StepRun>& steps, doub
   run["seconds"] = seconds;
   run["tool_version"] = CLUTTERSCOPE_VERSION;
   datasets::write_file_atomically(dir / "run.json", run.dump(2) + "\n");
+  batch::record_renderer(dir, renderer);
 }
 
 // ---- Belief figures ----
@@ -227,7 +230,7 @@ BeliefFigures belief_figures(const ReportJobOptions& options, const ReportSteps&
   const std::vector<ImageSummary> chosen =
       choose_belief_images(analysis.images, options.analysis.images_with_beliefs);
   if (chosen.empty()) return figures;
-  const bool saved_by_estimate = options.estimate_given.count("--save-beliefs") > 0;
+  const bool saved_by_estimate = steps.estimate_options.value("save_beliefs", false);
   const datasets::BopDataset dataset = batch::open_dataset(options.dataset);
   for (const ImageSummary& image : chosen) {
     fs::path samples = beliefs_csv(dir / kEstimateStep, image);
@@ -269,35 +272,22 @@ BeliefFigures belief_figures(const ReportJobOptions& options, const ReportSteps&
 bool ReportJobOptions::IsValid(std::string* why) const {
   if (!analysis.IsValid(why)) return false;
   if (!dataset.shard.empty()) {
-    *why =
-        "report does not take --shard: run `clutterscope visibility` and `clutterscope "
-        "estimate` shards, `clutterscope merge` them into DIR/visibility and DIR/estimate, "
-        "then run report on DIR";
-    return false;
+    try {
+      batch::parse_shard(dataset.shard);
+    } catch (const batch::UsageError& error) {
+      *why = error.what();
+      return false;
+    }
   }
   return true;
 }
 
-nlohmann::json report_fingerprint(const ReportJobOptions& options) {
+nlohmann::json report_fingerprint(const ReportJobOptions& options, const ReportSteps& steps) {
   nlohmann::json fingerprint;
   fingerprint["command"] = "report";
   fingerprint["dataset"] = dataset_fingerprint(options.dataset);
-  const auto options_of = [](const GivenOptions& given) {
-    nlohmann::json json = nlohmann::json::object();
-    for (const auto& [name, value] : given) json[name] = canonical_value(value);
-    return json;
-  };
-  fingerprint["visibility"] = options_of(options.visibility_given);
-  nlohmann::json estimate = options_of(options.estimate_given);
-  estimate["--variance-threshold-cm2"] =
-      batch::format_shortest(options.analysis.variance_threshold_cm2);
-  estimate["--seed"] = std::to_string(options.analysis.seed);
-  // Given only: folders of reports without it keep their fingerprint.
-  if (options.analysis.confidence_radius_cm) {
-    estimate["--confidence-radius-cm"] =
-        batch::format_shortest(*options.analysis.confidence_radius_cm);
-  }
-  fingerprint["estimate"] = estimate;
+  fingerprint["visibility"] = step_options(steps.visibility_options, fingerprint["dataset"]);
+  fingerprint["estimate"] = step_options(steps.estimate_options, fingerprint["dataset"]);
   return fingerprint;
 }
 
@@ -308,8 +298,9 @@ void prepare_report_folder(const fs::path& dir, const nlohmann::json& fingerprin
     const nlohmann::json stored = datasets::read_json(marker);
     const nlohmann::json patch = nlohmann::json::diff(stored, fingerprint);
     if (patch.empty()) return;
-    if (!has_step_results(dir)) {
-      // An earlier run was refused before any step started: nothing to mix, take it over.
+    if (!has_step_results(dir) || !has_resolved_options(stored)) {
+      // No step started, or a marker of an earlier version: nothing to mix here (each step
+      // still refuses a folder of another job), take it over.
       datasets::write_file_atomically(marker, fingerprint.dump(2) + "\n");
       return;
     }
@@ -326,12 +317,34 @@ void prepare_report_folder(const fs::path& dir, const nlohmann::json& fingerprin
   datasets::write_file_atomically(marker, fingerprint.dump(2) + "\n");
 }
 
+namespace {
+
+// After the steps of a shard: run.json and what to run next; the report needs every image.
+ReportRun shard_run(const ReportJobOptions& options, ReportRun run,
+                    std::chrono::steady_clock::time_point start, const std::string& renderer) {
+  const fs::path dir = options.dataset.out;
+  run.shard_only = true;
+  run.console_summary =
+      "shard " + options.dataset.shard + " done (" + std::to_string(run.steps.front().computed) +
+      " images computed, " + std::to_string(run.steps.front().resumed) +
+      " reused); when every shard has run, run the same command without --shard into " +
+      dir.string() +
+      " (shards run into other folders first: clutterscope merge SHARD_DIR... --out " +
+      dir.string() + ")\n";
+  write_run_json(dir, run.steps,
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                 renderer);
+  return run;
+}
+
+}  // namespace
+
 ReportRun run_report(const ReportJobOptions& options, const ReportSteps& steps) {
   const auto start = std::chrono::steady_clock::now();
   std::string why;
   if (!options.IsValid(&why)) throw batch::UsageError(why);
   const fs::path dir = options.dataset.out;
-  prepare_report_folder(dir, report_fingerprint(options));
+  prepare_report_folder(dir, report_fingerprint(options, steps));
   // The steps write DIR/visibility, DIR/estimate and DIR/beliefs/..., which belong to the
   // report: only its own steps may write there.
   const batch::DelegatedOutput steps_write_inside(dir);
@@ -342,6 +355,10 @@ ReportRun run_report(const ReportJobOptions& options, const ReportSteps& steps) 
     const StepResult step = step_run(name, (*job)(dir / name));
     run.exit_code = std::max(run.exit_code, step.exit_code);
     run.steps.push_back(step);
+  }
+  const auto renderer = [&steps] { return steps.renderer ? steps.renderer() : std::string(); };
+  if (!options.dataset.shard.empty()) {
+    return shard_run(options, std::move(run), start, renderer());
   }
 
   const fs::path visibility_dir = dir / kVisibilityStep;
@@ -362,8 +379,54 @@ ReportRun run_report(const ReportJobOptions& options, const ReportSteps& steps) 
   if (options.notebook) write_notebook(dir, options.analysis);
   run.console_summary = format_console_summary(analysis);
   write_run_json(dir, run.steps,
-                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                 renderer());
   return run;
+}
+
+batch::BatchResult merge_report_shards(const batch::MergeOptions& options) {
+  if (options.inputs.empty()) throw batch::UsageError("merge: no report folders given");
+  nlohmann::json fingerprint;
+  fs::path first;
+  for (const fs::path& input : options.inputs) {
+    const fs::path marker = marker_path(input);
+    if (!fs::is_regular_file(marker)) {
+      throw batch::UsageError(input.string() +
+                              " is not a report folder (no .report/job.json): report shards are "
+                              "merged only with other report shards");
+    }
+    const nlohmann::json stored = datasets::read_json(marker);
+    if (first.empty()) {
+      fingerprint = stored;
+      first = input;
+    } else if (stored != fingerprint) {
+      throw batch::UsageError(input.string() + " holds a report of a different job than " +
+                              first.string() + ": shards of one report only");
+    }
+  }
+  const fs::path out = options.out_dir;
+  prepare_report_folder(out, fingerprint);
+  const batch::DelegatedOutput steps_write_inside(out);
+  batch::BatchResult total;
+  for (const char* step : {kEstimateStep, kVisibilityStep}) {
+    batch::MergeOptions merge = options;
+    merge.inputs.clear();
+    for (const fs::path& input : options.inputs) {
+      if (fs::exists(input / step / ".batch" / "job.json")) merge.inputs.push_back(input / step);
+    }
+    if (merge.inputs.empty()) {
+      throw batch::UsageError("no report shard in the given folders has run its " +
+                              std::string(step) + " step");
+    }
+    merge.out_dir = out / step;
+    const batch::BatchResult result = merge_batches(merge);
+    total.complete = result.complete;
+    total.computed += result.computed;
+    total.resumed += result.resumed;
+    total.failed += result.failed;
+    total.seconds += result.seconds;
+  }
+  return total;
 }
 
 }  // namespace clutterscope::report

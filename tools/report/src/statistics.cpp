@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <clutterscope/batch/quantile.hpp>
 #include <clutterscope/report/statistics.hpp>
 #include <cmath>
 #include <numeric>
@@ -100,12 +101,7 @@ Statistic mean(const std::vector<double>& values) {
 
 Statistic quantile(std::vector<double> values, double probability) {
   if (values.empty()) return Statistic::undefined("no values");
-  std::sort(values.begin(), values.end());
-  const double position = std::clamp(probability, 0.0, 1.0) * (values.size() - 1);
-  const size_t below = static_cast<size_t>(std::floor(position));
-  const size_t above = std::min(below + 1, values.size() - 1);
-  const double fraction = position - below;
-  return Statistic::of(values[below] + fraction * (values[above] - values[below]));
+  return Statistic::of(batch::linear_quantile(std::move(values), probability));
 }
 
 const char* to_string(CorrelationKind kind) {

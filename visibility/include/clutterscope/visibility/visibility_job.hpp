@@ -10,6 +10,7 @@
 #include <clutterscope/batch/dataset_selection.hpp>
 #include <clutterscope/datasets/depth_check.hpp>
 #include <clutterscope/visibility/image_visibility.hpp>
+#include <nlohmann/json.hpp>
 #include <string>
 
 namespace clutterscope::visibility {
@@ -28,6 +29,10 @@ struct VisibilityJobOptions {
 
 // The tables and the summary builder of the job's output, for the runner and for `merge`.
 batch::BatchOutputSpec visibility_output_spec();
+
+// What identifies the job's results (batch::BatchJob::fingerprint): the dataset selection and
+// every result-changing option after defaults.
+nlohmann::json visibility_job_fingerprint(const VisibilityJobOptions& options);
 
 // Runs (or resumes) the job into options.dataset.out. Throws batch::UsageError for invalid
 // options, datasets::DatasetError for bad data (see batch::run_batch), render::RenderError.

@@ -8,6 +8,7 @@
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/dataset_selection.hpp>
 #include <clutterscope/scene_estimation/scene_estimate.hpp>
+#include <nlohmann/json.hpp>
 #include <string>
 
 namespace clutterscope::scene_estimation {
@@ -25,6 +26,12 @@ struct EstimateJobOptions {
 
 // The tables and the summary builder of the job's output, for the runner and for `merge`.
 batch::BatchOutputSpec estimate_output_spec();
+
+// What identifies the job's results (batch::BatchJob::fingerprint): the dataset selection and
+// every result-changing option after defaults, the model misfit resolved on `dataset`. Two
+// option sets with the same fingerprint compute the same results.
+nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
+                                        const datasets::BopDataset& dataset);
 
 // Runs (or resumes) the job into options.dataset.out. Throws batch::UsageError for invalid
 // options, datasets::DatasetError for bad data (see batch::run_batch), render::RenderError.

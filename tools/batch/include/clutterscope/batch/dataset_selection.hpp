@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace clutterscope::batch {
@@ -31,16 +32,42 @@ struct DatasetOptions {
   std::string targets;                // --targets FILE: test_targets_bop19/bop24.json
 };
 
-// Parses "1,2,5-7" into sorted unique ids. Throws UsageError naming `option` when malformed.
+// Parses "1,2,5-7" into sorted unique ids, ranges expanded (the canonical form of a selection,
+// for fingerprints). Throws UsageError naming `option` when malformed.
 std::vector<int> parse_id_list(const std::string& text, const std::string& option);
 
 // The canonical text of sorted unique ids: {1, 2, 5, 6, 7} -> "1,2,5-7" ("" = all).
 std::string format_id_list(const std::vector<int>& ids);
 
+// An id selection as given: ids one by one (each must exist) and ranges FIRST-LAST (each
+// selects the ids that exist within it, so "0-99" works on the sparse image ids of BOP
+// datasets, and must select at least one). Empty: every id.
+struct IdSelection {
+  std::vector<int> ids;
+  std::vector<std::pair<int, int>> ranges;  // first, last (both included)
+  bool selects_all() const { return ids.empty() && ranges.empty(); }
+};
+
+// Parses "1,2,5-7". Throws UsageError naming `option` when malformed.
+IdSelection parse_id_selection(const std::string& text, const std::string& option);
+
+// The ids of `selection` among `existing` (sorted unique), sorted. Throws datasets::DatasetError
+// against `file` naming an id that does not exist, or a range that selects none (with the ids
+// there are, briefly); `what` names the kind, e.g. "scene".
+std::vector<int> select_ids(const IdSelection& selection, const std::vector<int>& existing,
+                            const std::string& what, const std::filesystem::path& file);
+
+// The images of the options' selection (scenes, images, split, targets) in job order: what
+// selection_of lists, with ranges selecting the ids that exist. Throws datasets::DatasetError
+// as select_ids does and as BopDataset::list_images does.
+std::vector<datasets::ImageKey> list_selected_images(const datasets::BopDataset& dataset,
+                                                     const DatasetOptions& options);
+
 // The split folder of the options: SPLIT, or SPLIT_TYPE with --split-type.
 std::string split_folder(const DatasetOptions& options);
 
-// The dataset selection (one split folder, scene and image ids) of the options.
+// The dataset selection (one split folder, scene and image ids, ranges expanded) of the
+// options; list_selected_images resolves ranges to the ids that exist.
 datasets::DatasetSelection selection_of(const DatasetOptions& options);
 
 // Opens the dataset with --models-dir and --split-type, and attaches --targets when given.

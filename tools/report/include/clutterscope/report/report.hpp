@@ -145,6 +145,13 @@ ReportFiles write_report(const std::filesystem::path& dir, const std::vector<Obj
                          const ReportAnalysis& analysis, const std::vector<NamedPlot>& plots,
                          const nlohmann::ordered_json& run);
 
+// What to run when `command` (thresholds, notebook) finds no report in `dir`: "run `clutterscope
+// report DATASET --out OUT` first, then ...", with an OUT that report accepts: the report folder
+// `dir` is or lies in, else `dir` where report may write into it, else a new sibling DIR_report
+// (dir holds another command's results or other files). DATASET is the dataset path the
+// folder's marker records, where it has one.
+std::string report_advice(const std::filesystem::path& dir, const std::string& command);
+
 // Reads a report folder's objects.csv for `clutterscope thresholds DIR`. Throws
 // datasets::DatasetError saying what to run when the folder has no objects.csv or no
 // estimates in it.

@@ -14,8 +14,14 @@
 // estimated again, one by one with the samples saved, into DIR/beliefs/SPLIT_SCENE_IMID (the
 // same per-image random streams, so the same estimates; a re-run reuses them).
 //
-// DIR/.report/job.json records the dataset selection and the steps' options as given; a run
-// with a different dataset or different result-changing options is refused before any work.
+// DIR/.report/job.json records the dataset selection and the steps' options after defaults (the
+// jobs' fingerprints, so an explicit default is the same job); a run with a different dataset or
+// different result-changing options is refused before any work.
+//
+// Sharding (--shard I/N): each shard runs both steps on its images and stops before the
+// analysis. Shards may share DIR; shards run into different folders are combined with
+// merge_report_shards (`clutterscope merge`). The same command without --shard into the
+// complete folder then reuses every image and writes the report.
 // Analysis options (--accurate-cm, --visibility-cutoff) only change the report files, which
 // are rewritten as a whole from the two tables, so they may change between runs.
 
@@ -32,8 +38,7 @@
 namespace clutterscope::report {
 
 // Options given on the command line for one step, by option name ("--mode") with the value as
-// typed ("" for flags). They identify the job in DIR/.report/job.json; only given options are
-// listed, so each step keeps its own defaults.
+// typed ("" for flags): what the front end forwards, so each step keeps its own defaults.
 using GivenOptions = std::map<std::string, std::string>;
 
 struct ReportJobOptions {
@@ -43,7 +48,7 @@ struct ReportJobOptions {
   ReportOptions analysis;
   bool notebook = true;  // also write DIR/clutter_report.ipynb
   GivenOptions visibility_given, estimate_given;
-  // The analysis options, and no --shard (a report needs every image).
+  // The analysis options and --shard.
   bool IsValid(std::string* why) const;
 };
 
@@ -56,6 +61,12 @@ struct ReportSteps {
   std::function<batch::BatchResult(const datasets::ImageKey& image,
                                    const std::filesystem::path& out)>
       beliefs;
+  // The bound jobs' options after defaults (their job fingerprints), recorded in
+  // DIR/.report/job.json: options that resolve to the same jobs are the same report.
+  nlohmann::json visibility_options = nlohmann::json::object();
+  nlohmann::json estimate_options = nlohmann::json::object();
+  // The GL renderer the steps used ("" when none rendered), for run.json's "gl_renderer".
+  std::function<std::string()> renderer;
 };
 
 // What one step did in this run.
@@ -70,14 +81,15 @@ struct StepRun {
 struct ReportRun {
   std::vector<StepRun> steps;  // estimate, visibility, beliefs (the belief figures' images)
   ReportFiles files;
-  std::string console_summary;  // format_console_summary
+  std::string console_summary;  // format_console_summary; for a shard, what to run next
   int exit_code = 0;            // 1 when images failed under --keep-going
+  bool shard_only = false;      // --shard: the steps ran on the shard, no report files
 };
 
-// The report-level fingerprint: dataset selection and the steps' given options (numbers in
-// canonical form, so "15" and "15.0" are the same job), the estimate step's with the report's
-// threshold, seed and radius.
-nlohmann::json report_fingerprint(const ReportJobOptions& options);
+// The report-level fingerprint: the dataset selection and the steps' resolved options
+// (ReportSteps::visibility_options, estimate_options, without their dataset entries). No
+// --shard: the shards of a report are the same job.
+nlohmann::json report_fingerprint(const ReportJobOptions& options, const ReportSteps& steps);
 
 // Creates DIR/.report/job.json, or checks that DIR holds a report of the same job. Throws
 // batch::UsageError when it holds another job (naming the first difference) or when DIR may
@@ -89,5 +101,13 @@ void prepare_report_folder(const std::filesystem::path& dir, const nlohmann::jso
 // the files. Throws batch::UsageError for invalid options or a folder of another job, and what
 // the steps throw.
 ReportRun run_report(const ReportJobOptions& options, const ReportSteps& steps);
+
+// Combines report folders run with --shard I/N (each holds .report/job.json of the same job)
+// into `options.out_dir`: their visibility/ and estimate/ folders are merged with
+// batch::merge_batches (`options.outputs` lists the steps' outputs) and the report's marker is
+// written. Throws batch::UsageError for folders of different jobs or that are not report
+// folders, and what merge_batches throws (missing images). The report itself is written by a
+// later run without --shard into the folder.
+batch::BatchResult merge_report_shards(const batch::MergeOptions& options);
 
 }  // namespace clutterscope::report
