@@ -12,7 +12,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -325,14 +327,30 @@ batch::BatchOutputSpec estimate_output_spec() {
   return spec;
 }
 
+std::string synthetic_detections_note(const std::vector<datasets::ImageKey>& images) {
+  std::map<std::string, std::set<int>> scenes;  // split -> scene ids
+  for (const datasets::ImageKey& key : images) scenes[key.split].insert(key.scene_id);
+  std::string where;
+  for (const auto& [split, ids] : scenes) {
+    where += std::string(where.empty() ? "" : "; ") + "split " + split + ", scene" +
+             (ids.size() > 1 ? "s " : " ") +
+             batch::format_id_list(std::vector<int>(ids.begin(), ids.end()));
+  }
+  return "estimate: the detections of all " + std::to_string(images.size()) + " image" +
+         (images.size() == 1 ? "" : "s") + (where.empty() ? "" : " (" + where + ")") +
+         " come from the synthetic detector, which is built from the GT (100% recall); pass "
+         "--detections FILE to use a detector's";
+}
+
 bool EstimateJobOptions::IsValid(std::string* why) const { return estimate.IsValid(why); }
 
 batch::BatchResult run_estimate_job(const EstimateJobOptions& options) {
-  std::string why;
-  if (!options.IsValid(&why)) throw batch::UsageError(why);
   EstimateJobOptions job_options = options;
-  job_options.estimate.keep_history = options.save_beliefs;
+  job_options.estimate.keep_history = options.save_beliefs;  // before the memory bounds
+  std::string why;
+  if (!job_options.IsValid(&why)) throw batch::UsageError(why);
   datasets::BopDataset dataset = batch::open_dataset(job_options.dataset);
+  if (job_options.detections == kSyntheticDetections) job_options.detections.clear();
   if (!job_options.detections.empty()) dataset.attach_detections(job_options.detections);
   const EstimateOptions& e = job_options.estimate;
   batch::BatchJob job;
@@ -398,7 +416,12 @@ batch::BatchResult run_estimate_job(const EstimateJobOptions& options) {
   };
   // Set before the workers create their GL contexts (see render/context.hpp).
   const render::WorkerRasterisationScope rasterisation;
-  return batch::run_batch(job, batch::batch_options_of(job_options.dataset, "estimate"));
+  const batch::BatchResult result =
+      batch::run_batch(job, batch::batch_options_of(job_options.dataset, "estimate"));
+  if (job_options.detections.empty() && !job_options.dataset.quiet) {
+    std::fprintf(stderr, "%s\n", synthetic_detections_note(job.items).c_str());
+  }
+  return result;
 }
 
 }  // namespace clutterscope::scene_estimation

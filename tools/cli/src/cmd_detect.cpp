@@ -36,7 +36,8 @@ struct DetectArguments {
 void run_detect(const DetectArguments& arguments) {
   std::string why;
   if (!arguments.detector.IsValid(&why)) throw batch::UsageError(why);
-  batch::claim_output_file(arguments.out);
+  batch::claim_output_file(arguments.out, "--out", "detect",
+                           datasets::written_by_detections_writer);
   const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
   datasets::DatasetSelection selection;
   selection.splits = {arguments.split};

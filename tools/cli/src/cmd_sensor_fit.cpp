@@ -3,6 +3,7 @@
 // same scene and poses (the measured depth filling in the background the GT lacks) are compared
 // with the GT render by the same statistics, printed side by side.
 
+#include <clutterscope/batch/output_folder.hpp>
 #include <clutterscope/batch/progress.hpp>
 #include <clutterscope/cli/dataset_options.hpp>
 #include <clutterscope/datasets/bop.hpp>
@@ -18,6 +19,7 @@
 #include <clutterscope/scene_estimation/synthetic_view.hpp>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -82,10 +84,26 @@ nlohmann::json summary_json(const datasets::ResidualSummary& s) {
            }()}};
 }
 
+// A statistics file an earlier run wrote: a JSON object with exactly the keys written below.
+bool written_by_sensor_fit(const std::filesystem::path& path) {
+  std::ifstream file(path, std::ios::binary);
+  const nlohmann::json json = nlohmann::json::parse(file, nullptr, /*allow_exceptions=*/false);
+  static const std::vector<std::string> kKeys = {"all_agree", "dataset", "measured", "rows",
+                                                 "seed",      "sensor",  "simulated", "tolerance"};
+  std::vector<std::string> keys;
+  if (json.is_object()) {
+    for (const auto& item : json.items()) keys.push_back(item.key());  // sorted
+  }
+  return keys == kKeys;
+}
+
 int run_sensor_fit(const SensorFitArguments& arguments) {
   std::string why;
   if (!arguments.statistics.IsValid(&why)) throw batch::UsageError(why);
   if (!(arguments.tolerance > 0)) throw batch::UsageError("--tolerance must be > 0");
+  if (!arguments.json.empty()) {
+    batch::claim_output_file(arguments.json, "--json", "sensor-fit", written_by_sensor_fit);
+  }
   const datasets::SensorOptions sensor = arguments.sensor.resolve();
   const datasets::BopDataset dataset = open_dataset(arguments.dataset);
   const std::vector<datasets::ImageKey> keys = dataset.list_images(selection_of(arguments.dataset));
