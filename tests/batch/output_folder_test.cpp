@@ -140,8 +140,8 @@ TEST(OutputFolder, AnExistingFileIsReplacedOnlyWhenTheCommandWroteIt) {
                          " exists and is not a file `detect` wrote"),
             std::string::npos)
       << message;
-  EXPECT_NO_THROW(
-      claim_output_file(root / "notes.txt", "--out", "detect", [](const fs::path&) { return true; }));
+  EXPECT_NO_THROW(claim_output_file(root / "notes.txt", "--out", "detect",
+                                    [](const fs::path&) { return true; }));
 }
 
 TEST(OutputFolder, NothingIsWrittenIntoADatasetsSplitSceneOrModelsFolders) {
@@ -157,9 +157,10 @@ TEST(OutputFolder, NothingIsWrittenIntoADatasetsSplitSceneOrModelsFolders) {
     }
     return std::string();
   };
-  EXPECT_NE(refused(data / "test" / "000099").find(", a dataset's split folder (it holds " +
-                                                    (data / "test" / "000000").string()),
-            std::string::npos);
+  EXPECT_NE(
+      refused(data / "test" / "000099")
+          .find(", a dataset's split folder (it holds " + (data / "test" / "000000").string()),
+      std::string::npos);
   EXPECT_NE(refused(data / "test").find(" is a dataset's split folder"), std::string::npos);
   EXPECT_NE(refused(data / "train_pbr" / "x" / "y").find("split folder"), std::string::npos);
   EXPECT_NE(refused(data / "test" / "000000" / "depth").find("scene folder"), std::string::npos);

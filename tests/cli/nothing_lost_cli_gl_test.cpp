@@ -52,7 +52,8 @@ class NothingLostGlCli : public ::testing::Test {
 
 TEST_F(NothingLostGlCli, DetectReplacesTheFileItWroteEarlier) {
   const fs::path file = out("detections.json");
-  const std::string command = "detect " + quoted(data()) + " --scenes 0 --quiet --out " + quoted(file);
+  const std::string command =
+      "detect " + quoted(data()) + " --scenes 0 --quiet --out " + quoted(file);
   ASSERT_EQ(run_clutterscope(command).exit_code, 0);
   const std::string first = read_text(file);
   const CommandRun again = run_clutterscope(command);
@@ -70,8 +71,8 @@ TEST_F(NothingLostGlCli, DetectReplacesTheFileItWroteEarlier) {
 
 TEST_F(NothingLostGlCli, ReportKeepsANotebookAUserChanged) {
   const fs::path report = out("report");
-  const std::string command = "report " + quoted(data()) + " --scenes 0 --quiet --out " +
-                              quoted(report) + kFast;
+  const std::string command =
+      "report " + quoted(data()) + " --scenes 0 --quiet --out " + quoted(report) + kFast;
   ASSERT_EQ(run_clutterscope(command).exit_code, 0);
   const fs::path notebook = report / "clutter_report.ipynb";
   const std::string edited = read_text(notebook) + " ";  // e.g. Jupyter's re-save
@@ -135,10 +136,8 @@ TEST_F(NothingLostGlCli, EveryImageTakesItsDetectionsFromTheFile) {
                                   "detector's"),
               std::string::npos)
         << resumed.errors;
-    EXPECT_EQ(json_of(out(name) / "summary.json")
-                  .at("counts")
-                  .at("images_with_synthetic_detections"),
-              2);
+    EXPECT_EQ(
+        json_of(out(name) / "summary.json").at("counts").at("images_with_synthetic_detections"), 2);
   }
 }
 

@@ -50,15 +50,15 @@ TEST_F(NothingLostCli, NoCommandWritesIntoADatasetsSplitSceneOrModelsFolders) {
     std::string says;
   };
   const Case cases[] = {
-      {data() / "test" / "000099",
-       " is inside " + (data() / "test").string() + ", a dataset's split folder (it holds " +
-           (data() / "test" / "000001").string() + ")"},
+      {data() / "test" / "000099", " is inside " + (data() / "test").string() +
+                                       ", a dataset's split folder (it holds " +
+                                       (data() / "test" / "000001").string() + ")"},
       {data() / "test", " is a dataset's split folder"},
       {data() / "test" / "000001" / "results",
        " is inside " + (data() / "test" / "000001").string() + ", a dataset's scene folder"},
-      {data() / "models" / "results",
-       " is inside " + (data() / "models").string() + ", a dataset's models folder (it holds " +
-           (data() / "models" / "models_info.json").string() + ")"},
+      {data() / "models" / "results", " is inside " + (data() / "models").string() +
+                                          ", a dataset's models folder (it holds " +
+                                          (data() / "models" / "models_info.json").string() + ")"},
   };
   for (const Case& c : cases) {
     for (const std::string& command : commands_writing_into(data(), c.out)) {
@@ -95,11 +95,10 @@ TEST_F(NothingLostCli, DetectReplacesNoFileItDidNotWrite) {
   };
   for (const auto& [file, says] : cases) {
     const std::string before = read_text(file);
-    const CommandRun run = run_clutterscope("detect " + quoted(data()) + " --quiet --out " +
-                                            quoted(file));
+    const CommandRun run =
+        run_clutterscope("detect " + quoted(data()) + " --quiet --out " + quoted(file));
     EXPECT_EQ(run.exit_code, 2) << file << "\n" << run.errors;
-    EXPECT_NE(run.errors.find("--out " + file.string() + says), std::string::npos)
-        << run.errors;
+    EXPECT_NE(run.errors.find("--out " + file.string() + says), std::string::npos) << run.errors;
     EXPECT_EQ(read_text(file), before) << file;
     EXPECT_FALSE(fs::exists(file.string() + ".partial"));
   }
@@ -119,6 +118,26 @@ TEST_F(NothingLostCli, StatisticsFilesReplaceNoFileTheCommandDidNotWrite) {
     EXPECT_EQ(run.exit_code, 2) << command << "\n" << run.errors;
     EXPECT_NE(run.errors.find(says), std::string::npos) << run.errors;
     EXPECT_EQ(read_text(notes), "my notes\n");
+  }
+}
+
+TEST_F(NothingLostCli, GraphWriteKeepsAScenesOwnGraph) {
+  const fs::path graph = data() / "test" / "000001" / "scene_graph.json";
+  const std::string own = read_text(graph);  // the fixture's hand-written graph
+  const CommandRun refused = run_clutterscope("graph " + quoted(data()) + " --write");
+  EXPECT_EQ(refused.exit_code, 2) << refused.errors;
+  EXPECT_NE(refused.errors.find("--write: " + graph.string() +
+                                " exists and differs from the inferred graph; a scene's "
+                                "scene_graph.json is not replaced: remove it first"),
+            std::string::npos)
+      << refused.errors;
+  EXPECT_EQ(read_text(graph), own);
+  // Without one it is written, and a rerun that infers the same graph succeeds.
+  fs::remove(graph);
+  for (int run = 0; run < 2; ++run) {
+    const CommandRun written = run_clutterscope("graph " + quoted(data()) + " --write");
+    EXPECT_EQ(written.exit_code, 0) << written.errors;
+    EXPECT_TRUE(fs::exists(graph));
   }
 }
 
@@ -172,16 +191,17 @@ TEST_F(NothingLostCli, SizeOptionsAreBoundedByMemoryBeforeAnyWork) {
     const CommandRun run = run_clutterscope(command);
     EXPECT_EQ(run.exit_code, 2) << command << "\n" << run.errors;
     EXPECT_NE(run.errors.find("--particles must be <= "), std::string::npos) << run.errors;
-    EXPECT_NE(run.errors.find(" GiB of memory, half of it for the particles of one image), at "),
+    EXPECT_NE(run.errors.find(" GiB of memory, half of it for one image's estimate), at "),
               std::string::npos)
         << run.errors;
     EXPECT_NE(run.errors.find("got 2000000000"), std::string::npos) << run.errors;
   }
-  const CommandRun grid = run_clutterscope("estimate " + d + " --grid-pixels 2000000000 --out " + o);
+  const CommandRun grid =
+      run_clutterscope("estimate " + d + " --grid-pixels 2000000000 --out " + o);
   EXPECT_EQ(grid.exit_code, 2) << grid.errors;
   EXPECT_NE(grid.errors.find("--grid-pixels must be <= "), std::string::npos) << grid.errors;
-  const CommandRun history = run_clutterscope("estimate " + d +
-                                               " --save-beliefs --iterations 2000000000 --out " + o);
+  const CommandRun history =
+      run_clutterscope("estimate " + d + " --save-beliefs --iterations 2000000000 --out " + o);
   EXPECT_EQ(history.exit_code, 2) << history.errors;
   EXPECT_NE(history.errors.find("--iterations must be <= "), std::string::npos) << history.errors;
   EXPECT_NE(history.errors.find("with --save-beliefs at 100 particles"), std::string::npos)

@@ -121,15 +121,28 @@ std::uint64_t physical_memory_bytes() {
 
 namespace {
 
-// NBP's memory per particle and object: belief samples and weights, two message mixtures per
-// edge (means, weights, bandwidths), the Gibbs product draws and pointwise factors, about
-// 60 doubles with a few neighbours; rounded up to leave room for more neighbours.
+// NBP's memory per particle and object besides the depth tile: belief samples and weights,
+// two message mixtures per edge (means, weights, bandwidths), product draws and pointwise
+// factors: about 60 doubles with a few neighbours, rounded up.
 constexpr std::uint64_t kNbpBytesPerParticle = 1024;
+// Measured on the tray6 sample's scene 0 (6 estimated objects; --iterations 2, --jobs 1): peak
+// memory 234, 458 and 1248 MiB at M = 1000, 2000 and 4000, i.e. about 55 KB per particle
+// (6 x the 9216 bytes of estimate_bytes_per_particle at grid 32) plus 60 bytes per particle
+// pair (the exact product's M x M tables).
+constexpr std::uint64_t kReferenceObjects = 6;
+constexpr double kBytesPerParticlePair = 64;
 
 std::string format_gib(std::uint64_t bytes) {
   char text[32];
   std::snprintf(text, sizeof(text), "%.1f GiB", static_cast<double>(bytes) / (1ull << 30));
   return text;
+}
+
+// The largest M with M * linear + M^2 * kBytesPerParticlePair <= budget.
+std::uint64_t max_particles_within(double budget, double linear) {
+  const double b = kBytesPerParticlePair;
+  return static_cast<std::uint64_t>((-linear + std::sqrt(linear * linear + 4 * b * budget)) /
+                                    (2 * b));
 }
 
 }  // namespace
@@ -146,50 +159,49 @@ std::uint64_t estimate_bytes_per_particle(const EstimateOptions& options) {
 bool check_memory_bounds(const EstimateOptions& options, std::uint64_t memory_bytes,
                          std::string* why) {
   // Half the memory: the dataset, models, renderers and the other workers need the rest.
-  const std::uint64_t budget = memory_bytes / 2;
-  const std::string where = " here (" + format_gib(memory_bytes) +
-                            " of memory, half of it for the particles of one image)";
-  // The grid first: its tiles alone must leave room for the fewest particles (2).
-  const std::uint64_t max_grid = static_cast<std::uint64_t>(
-      std::sqrt(static_cast<double>(budget / 2) / (2 * sizeof(float))));
-  if (options.grid_pixels > 0 && static_cast<std::uint64_t>(options.grid_pixels) > max_grid) {
-    if (why) {
-      *why = "--grid-pixels must be <= " + std::to_string(max_grid) + where +
-             ": every particle renders a grid_pixels^2 depth tile, got " +
-             std::to_string(options.grid_pixels);
-    }
+  const double budget = static_cast<double>(memory_bytes / 2);
+  const std::string where =
+      " here (" + format_gib(memory_bytes) + " of memory, half of it for one image's estimate)";
+  const auto fail = [why](const std::string& message) {
+    if (why) *why = message;
     return false;
+  };
+  // The grid first: its tiles alone must leave room for the fewest particles (2).
+  const std::uint64_t max_grid =
+      static_cast<std::uint64_t>(std::sqrt(budget / (2.0 * kReferenceObjects * 2 * sizeof(float))));
+  if (options.grid_pixels > 0 && static_cast<std::uint64_t>(options.grid_pixels) > max_grid) {
+    return fail("--grid-pixels must be <= " + std::to_string(max_grid) + where +
+                ": every particle renders a grid_pixels^2 depth tile, got " +
+                std::to_string(options.grid_pixels));
   }
-  const std::uint64_t per_particle = estimate_bytes_per_particle(options);
-  const std::uint64_t max_particles = budget / per_particle;
   if (options.keep_history && options.particles >= 2 && options.iterations > 0) {
-    // The history grows with the iterations: bound them at the particles given.
+    // The kept samples grow with the iterations: bound them at the particles given.
+    const double m = options.particles;
     EstimateOptions without = options;
     without.keep_history = false;
-    const std::uint64_t room = budget / static_cast<std::uint64_t>(options.particles);
-    const std::uint64_t fixed = estimate_bytes_per_particle(without);
-    const std::uint64_t max_iterations = room > fixed ? (room - fixed) / (3 * sizeof(double)) : 0;
-    if (static_cast<std::uint64_t>(options.iterations) + 1 > max_iterations) {
-      if (why) {
-        *why = "--iterations must be <= " +
-               std::to_string(max_iterations > 0 ? max_iterations - 1 : 0) + where +
-               ", with --save-beliefs at " + std::to_string(options.particles) +
-               " particles (the samples of every iteration are kept), got " +
-               std::to_string(options.iterations);
-      }
-      return false;
+    const double room = (budget - kBytesPerParticlePair * m * m) / (m * kReferenceObjects) -
+                        static_cast<double>(estimate_bytes_per_particle(without));
+    const double max_iterations = std::max(0.0, std::floor(room / (3 * sizeof(double))) - 1);
+    if (options.iterations > max_iterations) {
+      return fail(
+          "--iterations must be <= " + std::to_string(static_cast<std::uint64_t>(max_iterations)) +
+          where + ", with --save-beliefs at " + std::to_string(options.particles) +
+          " particles (the samples of every iteration are kept), got " +
+          std::to_string(options.iterations));
     }
   }
+  const std::uint64_t per_particle = kReferenceObjects * estimate_bytes_per_particle(options);
+  const std::uint64_t max_particles =
+      max_particles_within(budget, static_cast<double>(per_particle));
   if (options.particles > 0 && static_cast<std::uint64_t>(options.particles) > max_particles) {
-    if (why) {
-      *why = "--particles must be <= " + std::to_string(max_particles) + where + ", at " +
-             std::to_string(per_particle) + " bytes per particle (its " +
-             std::to_string(options.grid_pixels) + "x" + std::to_string(options.grid_pixels) +
-             " depth tile and NBP's samples and messages" +
-             (options.keep_history ? ", and its samples of every iteration" : "") + "), got " +
-             std::to_string(options.particles);
-    }
-    return false;
+    return fail("--particles must be <= " + std::to_string(max_particles) + where + ", at " +
+                std::to_string(per_particle) + " bytes per particle and " +
+                std::to_string(static_cast<int>(kBytesPerParticlePair)) +
+                " per particle pair (for about " + std::to_string(kReferenceObjects) +
+                " objects: their " + std::to_string(options.grid_pixels) + "x" +
+                std::to_string(options.grid_pixels) + " depth tiles, NBP's samples and messages" +
+                (options.keep_history ? ", the samples of every iteration" : "") +
+                " and the exact product's tables), got " + std::to_string(options.particles));
   }
   return true;
 }

@@ -73,8 +73,8 @@ void check_folders_above(const fs::path& path, const fs::path& as_given) {
 
 // BOP scene folders are named by six digits (000000, 000048, ...).
 bool is_scene_folder_name(const std::string& name) {
-  return name.size() == 6 && std::all_of(name.begin(), name.end(),
-                                         [](char c) { return c >= '0' && c <= '9'; });
+  return name.size() == 6 &&
+         std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
 bool holds_scene_files(const fs::path& dir) {
@@ -90,19 +90,21 @@ std::optional<std::pair<std::string, fs::path>> dataset_content(const fs::path& 
   if (!fs::is_directory(dir, error)) return std::nullopt;
   if (holds_scene_files(dir)) {
     const fs::path shown = fs::exists(dir / "scene_gt.json", error) ? dir / "scene_gt.json"
-                                                                     : dir / "scene_camera.json";
+                                                                    : dir / "scene_camera.json";
     return std::pair{std::string("scene folder"), shown};
   }
   if (fs::is_regular_file(dir / "models_info.json", error)) {
     return std::pair{std::string("models folder"), dir / "models_info.json"};
   }
-  // A split folder (test, train_pbr, val, ...) holds scene folders.
+  // A split folder (test, train_pbr, val, ...) holds scene folders; the first one is named.
+  std::optional<fs::path> first;
   for (const auto& entry : fs::directory_iterator(dir, error)) {
-    if (is_scene_folder_name(entry.path().filename().string()) &&
-        holds_scene_files(entry.path())) {
-      return std::pair{std::string("split folder"), entry.path()};
+    if (is_scene_folder_name(entry.path().filename().string()) && holds_scene_files(entry.path()) &&
+        (!first || entry.path() < *first)) {
+      first = entry.path();
     }
   }
+  if (first) return std::pair{std::string("split folder"), *first};
   return std::nullopt;
 }
 

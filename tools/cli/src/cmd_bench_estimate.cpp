@@ -185,7 +185,8 @@ void run_bench(const BenchEstimateArguments& arguments) {
   options.grid_pixels = arguments.grid_pixels;
   // The estimator's bounds (memory among them) at the largest M measured.
   scene_estimation::EstimateOptions largest = options;
-  largest.particles = std::max(arguments.particles, *std::max_element(particles.begin(), particles.end()));
+  largest.particles =
+      std::max(arguments.particles, *std::max_element(particles.begin(), particles.end()));
   std::string why;
   if (!largest.IsValid(&why)) throw batch::UsageError("bench estimate: " + why);
   const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);

@@ -22,7 +22,8 @@ void run_notebook_command(const NotebookCommandOptions& options) {
   notebook.generator = std::string("clutterscope ") + CLUTTERSCOPE_VERSION;
   std::string why;
   if (!notebook.IsValid(&why)) throw CLI::ValidationError("notebook", why);  // NaN slips CLI11
-  const report::ReportNotebook written = report::write_report_notebook(options.report_dir, notebook);
+  const report::ReportNotebook written =
+      report::write_report_notebook(options.report_dir, notebook);
   const notebooks_export::NotebookSummary& summary = written.written;
   if (!written.kept.empty()) std::cerr << report::notebook_kept_message(written) << "\n";
   std::cout << "wrote " << summary.path.string() << " (" << summary.code_cells << " code and "

@@ -40,7 +40,9 @@ const std::vector<StepOption>& step_options() {
       {"estimate", "--iterations", false, "estimate: NBP iterations"},
       {"estimate", "--gibbs-sweeps", false, "estimate: Gibbs sweeps per product"},
       {"estimate", "--icp-samples", false, "estimate: K belief samples refined by ICP"},
-      {"estimate", "--detections", false, "estimate: BOP 2D detections JSON (an image without entries has none), or synthetic (default)"},
+      {"estimate", "--detections", false,
+       "estimate: BOP 2D detections JSON (an image without entries has none), or synthetic "
+       "(default)"},
       {"estimate", "--unary-lambda", false, "estimate: lambda_r of Eq. 6"},
       {"estimate", "--unary-truncation-mm", false, "estimate: truncation of the Eq. 6 unary"},
       {"estimate", "--grid-pixels", false, "estimate: scoring grid size"},
@@ -152,6 +154,9 @@ class BoundSteps {
     parse_step_flags(step_command_line(options, "visibility"), &add_visibility_options,
                      &visibility);
     visibility_ = visibility.options();
+    // The estimator's bounds (memory among them) before the report folder is marked.
+    std::string why;
+    if (!estimate_.IsValid(&why)) throw batch::UsageError(why);
   }
 
   report::ReportSteps steps() const {

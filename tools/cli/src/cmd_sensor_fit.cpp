@@ -88,7 +88,7 @@ nlohmann::json summary_json(const datasets::ResidualSummary& s) {
 bool written_by_sensor_fit(const std::filesystem::path& path) {
   std::ifstream file(path, std::ios::binary);
   const nlohmann::json json = nlohmann::json::parse(file, nullptr, /*allow_exceptions=*/false);
-  static const std::vector<std::string> kKeys = {"all_agree", "dataset", "measured", "rows",
+  static const std::vector<std::string> kKeys = {"all_agree", "dataset", "measured",  "rows",
                                                  "seed",      "sensor",  "simulated", "tolerance"};
   std::vector<std::string> keys;
   if (json.is_object()) {

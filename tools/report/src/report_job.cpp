@@ -388,8 +388,8 @@ ReportNotebook write_report_notebook(const fs::path& dir,
       break;
     }
     const std::string existing = datasets::read_file(candidate);
-    if (existing == text || (record.contains(notebook_name(k)) &&
-                             record[notebook_name(k)] == digest_of(existing))) {
+    if (existing == text ||
+        (record.contains(notebook_name(k)) && record[notebook_name(k)] == digest_of(existing))) {
       name = notebook_name(k);
     } else if (k == 0) {
       notebook.kept = candidate;
