@@ -387,7 +387,10 @@ void add_bench_calibration_command(CLI::App& app, int* exit_code) {
                    "generator seed (default: held out, unlike the bundled samples' 4 and 7)")
       ->capture_default_str();
   command->add_option("--jobs", arguments->jobs, "estimation threads (default: the cores)");
-  command->add_option("--csv", arguments->csv, "also write the per-object rows to this CSV file");
+  command->add_option(
+      "--csv", arguments->csv,
+      "also write the per-object rows to this CSV file (an existing file is replaced only when "
+      "bench calibration wrote it)");
   command->add_flag("--quiet", arguments->quiet, "no progress lines on stderr");
   add_estimator_options(*command, arguments->estimate);
   command->callback([arguments, exit_code] {

@@ -246,7 +246,10 @@ void add_sensor_fit_command(CLI::App& app, int* exit_code) {
       ->add_option("--interior-margin", arguments->statistics.interior_margin_px,
                    "object pixels at least this many pixels from an edge are interior")
       ->capture_default_str();
-  command->add_option("--json", arguments->json, "also write the statistics to this JSON file");
+  command->add_option(
+      "--json", arguments->json,
+      "also write the statistics to this JSON file (an existing file is replaced only when "
+      "sensor-fit wrote it)");
   command->callback([arguments, exit_code] { *exit_code = run_sensor_fit(*arguments); });
 }
 
