@@ -207,6 +207,15 @@ TEST_F(NothingLostCli, SizeOptionsAreBoundedByMemoryBeforeAnyWork) {
   EXPECT_NE(history.errors.find("with --save-beliefs at 100 particles"), std::string::npos)
       << history.errors;
   EXPECT_FALSE(fs::exists(out));
+  // bench visibility's workload: 2e14 and 2e12 triangles.
+  for (const std::string& command :
+       {std::string("bench visibility --objects 100000 --triangles 2000000000"),
+        std::string("bench visibility --dense --models 1000 --triangles-max 2000000000")}) {
+    const CommandRun run = run_clutterscope(command);
+    EXPECT_EQ(run.exit_code, 2) << command << "\n" << run.errors;
+    EXPECT_NE(run.errors.find("GiB of memory: lower --"), std::string::npos) << run.errors;
+    EXPECT_NE(run.errors.find(" triangles at 64 bytes"), std::string::npos) << run.errors;
+  }
 }
 
 }  // namespace
