@@ -379,8 +379,12 @@ SceneView BopDataset::load(const ImageKey& key) const {
   view.camera = record.camera;
   view.objects = record.objects;
   view.graph = record.graph;
-  const auto detections = detections_.find({key.scene_id, key.im_id});
-  if (detections != detections_.end()) view.detections = detections->second;
+  if (detections_) {
+    // A file is attached: an image it has no entry for has no detections.
+    view.detections.emplace();
+    const auto detections = detections_->find({key.scene_id, key.im_id});
+    if (detections != detections_->end()) view.detections = detections->second;
+  }
   if (targets_ && targets_->per_object) view.target_gt = target_instances(view);
   view.depth_path = depth_file(files->dir, key.im_id);
   view.rgb_path = rgb_file(files->dir, key.im_id);

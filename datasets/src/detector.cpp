@@ -5,6 +5,7 @@
 #include <clutterscope/datasets/files.hpp>
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 namespace clutterscope::datasets {
 
@@ -32,6 +33,10 @@ Eigen::Vector4d jittered_box(double x0, double y0, double x1, double y1, double 
   return Eigen::Vector4d(round_to(x0, 0.01), round_to(y0, 0.01), round_to(x1 - x0, 0.01),
                          round_to(y1 - y0, 0.01));
 }
+
+// The layout of a detections file: "[", entries one per line, "]".
+std::string entry_separator(std::size_t written) { return written == 0 ? "\n  " : ",\n  "; }
+std::string list_end(std::size_t written) { return written == 0 ? "]\n" : "\n]\n"; }
 
 }  // namespace
 
@@ -161,6 +166,30 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
   return detections;
 }
 
+bool written_by_detections_writer(const std::filesystem::path& path) {
+  std::ifstream file(path, std::ios::binary);
+  std::stringstream text;
+  text << file.rdbuf();
+  if (!file) return false;
+  const nlohmann::ordered_json list =
+      nlohmann::ordered_json::parse(text.str(), nullptr, /*allow_exceptions=*/false);
+  if (!list.is_array()) return false;
+  // What add() and finish() write for these entries; another layout or key order is not ours.
+  static const std::vector<std::string> kKeys = {"scene_id", "image_id", "category_id",
+                                                 "score",    "bbox",     "time"};
+  std::string rewritten = "[";
+  std::size_t count = 0;
+  for (const auto& entry : list) {
+    if (!entry.is_object() || entry.size() != kKeys.size()) return false;
+    std::size_t k = 0;
+    for (const auto& item : entry.items()) {
+      if (item.key() != kKeys[k++]) return false;
+    }
+    rewritten += entry_separator(count++) + entry.dump();
+  }
+  return rewritten + list_end(count) == text.str();
+}
+
 DetectionsWriter::DetectionsWriter(std::filesystem::path path)
     : path_(std::move(path)), temporary_(path_.string() + ".partial") {
   if (path_.has_parent_path()) create_folders(path_.parent_path());
@@ -186,14 +215,14 @@ void DetectionsWriter::add(int scene_id, int im_id, const std::vector<Detection>
     entry["score"] = detection.score;
     entry["bbox"] = {detection.bbox[0], detection.bbox[1], detection.bbox[2], detection.bbox[3]};
     entry["time"] = detection.time;
-    stream_ << (count_ == 0 ? "\n  " : ",\n  ") << entry.dump();
+    stream_ << entry_separator(count_) << entry.dump();
     ++count_;
   }
   if (!stream_) throw_write_error(temporary_, errno);
 }
 
 void DetectionsWriter::finish() {
-  stream_ << (count_ == 0 ? "]\n" : "\n]\n");
+  stream_ << list_end(count_);
   close_checked(stream_, temporary_);
   rename_checked(temporary_, path_);
   finished_ = true;

@@ -198,7 +198,8 @@ json make_clutter_notebook(const NotebookOptions& options) {
 std::string format_notebook(const json& notebook) { return notebook.dump(1) + "\n"; }
 
 NotebookSummary write_clutter_notebook(const std::filesystem::path& report_dir,
-                                       const NotebookOptions& options) {
+                                       const NotebookOptions& options,
+                                       const std::string& file_name) {
   const json notebook = make_clutter_notebook(options);
   const std::filesystem::path objects = report_dir / "objects.csv";
   if (!std::filesystem::is_regular_file(objects)) {
@@ -208,7 +209,7 @@ NotebookSummary write_clutter_notebook(const std::filesystem::path& report_dir,
                             report_dir.string() + "` first");
   }
   NotebookSummary summary;
-  summary.path = report_dir / kNotebookFileName;
+  summary.path = report_dir / file_name;
   write_atomically(summary.path, format_notebook(notebook));
   for (const json& cell : notebook["cells"]) {
     (cell["cell_type"] == "markdown" ? summary.markdown_cells : summary.code_cells) += 1;

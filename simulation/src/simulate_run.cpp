@@ -51,7 +51,7 @@ datasets::SceneView round_view(const datasets::SceneView& view, const WorldState
   round.graph = state.present_graph();
   round.depth_path.clear();
   round.rgb_path.clear();
-  round.detections.clear();
+  round.detections.reset();
   return round;
 }
 

@@ -206,6 +206,22 @@ TEST(Batch, AChangedItemThatNowFailsDoesNotKeepItsOldResult) {
   EXPECT_EQ(summary["totals"]["failures"][0]["scene_id"], 1);
 }
 
+TEST(Batch, AFailedItemIsNotCountedAsComputed) {
+  FakeJobOptions fake;
+  fake.scenes = 1;
+  fake.images_per_scene = 6;
+  fake.fail_modulo = 5;  // image 1 fails
+  const fs::path out = fresh_dir("failed_not_computed");
+  BatchOptions options = options_for(out, 2);
+  options.keep_going = true;
+  const BatchResult result = run_batch(fake_job(out, fake), options);
+  EXPECT_EQ(result.failed, 1u);
+  EXPECT_EQ(result.computed, 5u);  // as summary.json's ok items and run.json's computed
+  const auto summary = nlohmann::json::parse(read_file(out / "summary.json"));
+  EXPECT_EQ(summary["totals"]["ok"], 5);
+  EXPECT_EQ(nlohmann::json::parse(read_file(out / "run.json"))["computed"], 5);
+}
+
 TEST(Batch, ShardsMergeToTheBytesOfOneRun) {
   FakeJobOptions fake;
   fake.scenes = 3;

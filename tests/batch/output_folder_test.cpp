@@ -111,15 +111,68 @@ TEST(OutputFolder, ANonEmptyFolderWithoutMarkerIsRefusedNamingAFile) {
   EXPECT_NE(message.find((root / "mine" / "notes.txt").string()), std::string::npos) << message;
 }
 
+// An output file claimed by a command that recognises nothing as its own, or everything.
+void claim_new_file(const fs::path& file) {
+  claim_output_file(file, "--out", "detect", [](const fs::path&) { return false; });
+}
+
 TEST(OutputFolder, OutputFilesMayNotGoIntoResultsFolders) {
   const fs::path root = fresh_dir("files");
   write(root / "report" / ".report" / "job.json", "{\"command\": \"report\"}");
-  EXPECT_THROW(claim_output_file(root / "report" / "detections.json"), UsageError);
-  EXPECT_THROW(claim_output_file(root / "report"), UsageError);  // a folder
+  EXPECT_THROW(claim_new_file(root / "report" / "detections.json"), UsageError);
+  EXPECT_THROW(claim_new_file(root / "report"), UsageError);  // a folder
   write(root / "data" / "models" / "models_info.json", "{}");
-  EXPECT_NO_THROW(claim_output_file(root / "data" / "detections_test.json"));
+  EXPECT_NO_THROW(claim_new_file(root / "data" / "detections_test.json"));
   write(root / "elsewhere" / "notes.txt", "x");
-  EXPECT_NO_THROW(claim_output_file(root / "elsewhere" / "detections.json"));
+  EXPECT_NO_THROW(claim_new_file(root / "elsewhere" / "detections.json"));
+}
+
+TEST(OutputFolder, AnExistingFileIsReplacedOnlyWhenTheCommandWroteIt) {
+  const fs::path root = fresh_dir("existing_file");
+  write(root / "notes.txt", "x");
+  std::string message;
+  try {
+    claim_new_file(root / "notes.txt");
+  } catch (const UsageError& error) {
+    message = error.what();
+  }
+  EXPECT_NE(message.find("--out " + (root / "notes.txt").string() +
+                         " exists and is not a file `detect` wrote"),
+            std::string::npos)
+      << message;
+  EXPECT_NO_THROW(claim_output_file(root / "notes.txt", "--out", "detect",
+                                    [](const fs::path&) { return true; }));
+}
+
+TEST(OutputFolder, NothingIsWrittenIntoADatasetsSplitSceneOrModelsFolders) {
+  const fs::path data = fresh_dir("dataset_content");
+  write(data / "models" / "models_info.json", "{}");
+  write(data / "test" / "000000" / "scene_gt.json", "{}");
+  write(data / "train_pbr" / "000003" / "scene_camera.json", "{}");
+  const auto refused = [](const fs::path& path) {
+    try {
+      refuse_dataset_content(path, "--out");
+    } catch (const UsageError& error) {
+      return std::string(error.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(
+      refused(data / "test" / "000099")
+          .find(", a dataset's split folder (it holds " + (data / "test" / "000000").string()),
+      std::string::npos);
+  EXPECT_NE(refused(data / "test").find(" is a dataset's split folder"), std::string::npos);
+  EXPECT_NE(refused(data / "train_pbr" / "x" / "y").find("split folder"), std::string::npos);
+  EXPECT_NE(refused(data / "test" / "000000" / "depth").find("scene folder"), std::string::npos);
+  EXPECT_NE(refused(data / "models" / "a.json").find("models folder"), std::string::npos);
+  EXPECT_NE(refused(data / "models").find("models folder"), std::string::npos);
+  // The root of a dataset may hold results; so may folders beside it.
+  EXPECT_EQ(refused(data / "results"), "");
+  EXPECT_EQ(refused(data), "");
+  EXPECT_EQ(refused(data.parent_path() / "elsewhere"), "");
+  // claim_output_folder follows the same rule.
+  EXPECT_NE(refusal(data / "test" / "000099", "visibility").find("split folder"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -325,15 +325,22 @@ TEST(BopReader, AttachedDetectionsAreReturnedPerImage) {
              "\"bbox\": [0, 0, 64, 48]}]");
   dataset.attach_detections(detections);
   const SceneView view = dataset.load({"test", 1, 1});
-  ASSERT_EQ(view.detections.size(), 2u);
-  EXPECT_EQ(view.detections[0].obj_id, 2);
-  EXPECT_DOUBLE_EQ(view.detections[0].score, 0.9);
-  EXPECT_EQ(view.detections[0].bbox, Eigen::Vector4d(10, 12, 20.5, 8));
-  EXPECT_DOUBLE_EQ(view.detections[0].time, 0.25);
+  ASSERT_EQ(view.detections->size(), 2u);
+  EXPECT_EQ((*view.detections)[0].obj_id, 2);
+  EXPECT_DOUBLE_EQ((*view.detections)[0].score, 0.9);
+  EXPECT_EQ((*view.detections)[0].bbox, Eigen::Vector4d(10, 12, 20.5, 8));
+  EXPECT_DOUBLE_EQ((*view.detections)[0].time, 0.25);
   const SceneView first = dataset.load({"test", 1, 0});
-  ASSERT_EQ(first.detections.size(), 1u);
-  EXPECT_EQ(first.detections[0].time, -1.0);  // absent time
-  EXPECT_TRUE(opened.load({"test", 1, 1}).detections.empty());
+  ASSERT_EQ(first.detections->size(), 1u);
+  EXPECT_EQ((*first.detections)[0].time, -1.0);                      // absent time
+  EXPECT_FALSE(opened.load({"test", 1, 1}).detections.has_value());  // no file attached
+  // An image the attached file has no entries for has no detections (not "none attached").
+  BopDataset empty_file = BopDataset::open(dir.path());
+  write_text(dir.path() / "none.json", "[]");
+  empty_file.attach_detections(dir.path() / "none.json");
+  const auto without_entries = empty_file.load({"test", 1, 1}).detections;
+  ASSERT_TRUE(without_entries.has_value());
+  EXPECT_TRUE(without_entries->empty());
 }
 
 }  // namespace

@@ -13,8 +13,10 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -327,6 +329,21 @@ batch::BatchOutputSpec estimate_output_spec() {
   return spec;
 }
 
+std::string synthetic_detections_note(const std::vector<datasets::ImageKey>& images) {
+  std::map<std::string, std::set<int>> scenes;  // split -> scene ids
+  for (const datasets::ImageKey& key : images) scenes[key.split].insert(key.scene_id);
+  std::string where;
+  for (const auto& [split, ids] : scenes) {
+    where += std::string(where.empty() ? "" : "; ") + "split " + split + ", scene" +
+             (ids.size() > 1 ? "s " : " ") +
+             batch::format_id_list(std::vector<int>(ids.begin(), ids.end()));
+  }
+  return "estimate: the detections of all " + std::to_string(images.size()) + " image" +
+         (images.size() == 1 ? "" : "s") + (where.empty() ? "" : " (" + where + ")") +
+         " come from the synthetic detector, which is built from the GT (100% recall); pass "
+         "--detections FILE to use a detector's";
+}
+
 bool EstimateJobOptions::IsValid(std::string* why) const { return estimate.IsValid(why); }
 
 nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
@@ -340,8 +357,9 @@ nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
   fingerprint["variance_threshold_cm2"] = e.variance_threshold_cm2;
   if (e.confidence_radius_cm) fingerprint["confidence_radius_cm"] = *e.confidence_radius_cm;
   fingerprint["seed"] = e.seed;
-  fingerprint["detections"] =
-      options.detections.empty() ? "" : fs::absolute(options.detections).string();
+  const bool synthetic =
+      options.detections.empty() || options.detections == kSyntheticDetections;
+  fingerprint["detections"] = synthetic ? "" : fs::absolute(options.detections).string();
   fingerprint["save_beliefs"] = options.save_beliefs;
   fingerprint["no_time"] = options.no_time;
   fingerprint["unary_lambda"] = e.unary_lambda;
@@ -388,11 +406,12 @@ nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
 }
 
 batch::BatchResult run_estimate_job(const EstimateJobOptions& options) {
-  std::string why;
-  if (!options.IsValid(&why)) throw batch::UsageError(why);
   EstimateJobOptions job_options = options;
-  job_options.estimate.keep_history = options.save_beliefs;
+  job_options.estimate.keep_history = options.save_beliefs;  // before the memory bounds
+  std::string why;
+  if (!job_options.IsValid(&why)) throw batch::UsageError(why);
   datasets::BopDataset dataset = batch::open_dataset(job_options.dataset);
+  if (job_options.detections == kSyntheticDetections) job_options.detections.clear();
   if (!job_options.detections.empty()) dataset.attach_detections(job_options.detections);
   batch::BatchJob job;
   const batch::BatchOutputSpec output = estimate_output_spec();
@@ -409,6 +428,9 @@ batch::BatchResult run_estimate_job(const EstimateJobOptions& options) {
   const batch::BatchResult result =
       batch::run_batch(job, batch::batch_options_of(job_options.dataset, "estimate"));
   batch::record_renderer(job_options.dataset.out, render::renderer_in_use());
+  if (job_options.detections.empty() && !job_options.dataset.quiet) {
+    std::fprintf(stderr, "%s\n", synthetic_detections_note(job.items).c_str());
+  }
   return result;
 }
 

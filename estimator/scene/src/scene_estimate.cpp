@@ -1,6 +1,8 @@
 // SceneEstimator: the estimator's options, and estimate() running the stages of
 // scene_stages.hpp; the first three (frame the scene, observe, match detections) are here.
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <clutterscope/datasets/detector.hpp>
 #include <clutterscope/datasets/errors.hpp>
@@ -13,6 +15,7 @@
 #include <clutterscope/visibility/image_visibility.hpp>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 #include "scene_stages.hpp"
@@ -105,7 +108,102 @@ bool EstimateOptions::IsValid(std::string* why) const {
     return fail("amodal box sigma must be a finite number > 0");
   if (!(amodal_depth_span >= 0) || !std::isfinite(amodal_depth_span))
     return fail("amodal depth span must be a finite number >= 0");
+  if (!check_memory_bounds(*this, physical_memory_bytes(), why)) return false;
   return depth.IsValid(why);
+}
+
+std::uint64_t physical_memory_bytes() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page_size = ::sysconf(_SC_PAGE_SIZE);
+  // Unknown (never on Linux): no bound rather than a made-up one.
+  if (pages <= 0 || page_size <= 0) return std::numeric_limits<std::uint64_t>::max();
+  return static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page_size);
+}
+
+namespace {
+
+// NBP's memory per particle and object besides the depth tile: belief samples and weights,
+// two message mixtures per edge (means, weights, bandwidths), product draws and pointwise
+// factors: about 60 doubles with a few neighbours, rounded up.
+constexpr std::uint64_t kNbpBytesPerParticle = 1024;
+// Measured on the tray6 sample's scene 0 (6 estimated objects; --iterations 2, --jobs 1): peak
+// memory 234, 458 and 1248 MiB at M = 1000, 2000 and 4000, i.e. about 55 KB per particle
+// (6 x the 9216 bytes of estimate_bytes_per_particle at grid 32) plus 60 bytes per particle
+// pair (the exact product's M x M tables).
+constexpr std::uint64_t kReferenceObjects = 6;
+constexpr double kBytesPerParticlePair = 64;
+
+std::string format_gib(std::uint64_t bytes) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.1f GiB", static_cast<double>(bytes) / (1ull << 30));
+  return text;
+}
+
+// The largest M with M * linear + M^2 * kBytesPerParticlePair <= budget.
+std::uint64_t max_particles_within(double budget, double linear) {
+  const double b = kBytesPerParticlePair;
+  return static_cast<std::uint64_t>((-linear + std::sqrt(linear * linear + 4 * b * budget)) /
+                                    (2 * b));
+}
+
+}  // namespace
+
+std::uint64_t estimate_bytes_per_particle(const EstimateOptions& options) {
+  const std::uint64_t grid = static_cast<std::uint64_t>(std::max(options.grid_pixels, 0));
+  std::uint64_t bytes = 2 * grid * grid * sizeof(float) + kNbpBytesPerParticle;
+  if (options.keep_history) {
+    bytes += static_cast<std::uint64_t>(std::max(options.iterations, 0) + 1) * 3 * sizeof(double);
+  }
+  return bytes;
+}
+
+bool check_memory_bounds(const EstimateOptions& options, std::uint64_t memory_bytes,
+                         std::string* why) {
+  // Half the memory: the dataset, models, renderers and the other workers need the rest.
+  const double budget = static_cast<double>(memory_bytes / 2);
+  const std::string where =
+      " here (" + format_gib(memory_bytes) + " of memory, half of it for one image's estimate)";
+  const auto fail = [why](const std::string& message) {
+    if (why) *why = message;
+    return false;
+  };
+  // The grid first: its tiles alone must leave room for the fewest particles (2).
+  const std::uint64_t max_grid =
+      static_cast<std::uint64_t>(std::sqrt(budget / (2.0 * kReferenceObjects * 2 * sizeof(float))));
+  if (options.grid_pixels > 0 && static_cast<std::uint64_t>(options.grid_pixels) > max_grid) {
+    return fail("--grid-pixels must be <= " + std::to_string(max_grid) + where +
+                ": every particle renders a grid_pixels^2 depth tile, got " +
+                std::to_string(options.grid_pixels));
+  }
+  if (options.keep_history && options.particles >= 2 && options.iterations > 0) {
+    // The kept samples grow with the iterations: bound them at the particles given.
+    const double m = options.particles;
+    EstimateOptions without = options;
+    without.keep_history = false;
+    const double room = (budget - kBytesPerParticlePair * m * m) / (m * kReferenceObjects) -
+                        static_cast<double>(estimate_bytes_per_particle(without));
+    const double max_iterations = std::max(0.0, std::floor(room / (3 * sizeof(double))) - 1);
+    if (options.iterations > max_iterations) {
+      return fail(
+          "--iterations must be <= " + std::to_string(static_cast<std::uint64_t>(max_iterations)) +
+          where + ", with --save-beliefs at " + std::to_string(options.particles) +
+          " particles (the samples of every iteration are kept), got " +
+          std::to_string(options.iterations));
+    }
+  }
+  const std::uint64_t per_particle = kReferenceObjects * estimate_bytes_per_particle(options);
+  const std::uint64_t max_particles =
+      max_particles_within(budget, static_cast<double>(per_particle));
+  if (options.particles > 0 && static_cast<std::uint64_t>(options.particles) > max_particles) {
+    return fail("--particles must be <= " + std::to_string(max_particles) + where + ", at " +
+                std::to_string(per_particle) + " bytes per particle and " +
+                std::to_string(static_cast<int>(kBytesPerParticlePair)) +
+                " per particle pair (for about " + std::to_string(kReferenceObjects) +
+                " objects: their " + std::to_string(options.grid_pixels) + "x" +
+                std::to_string(options.grid_pixels) + " depth tiles, NBP's samples and messages" +
+                (options.keep_history ? ", the samples of every iteration" : "") +
+                " and the exact product's tables), got " + std::to_string(options.particles));
+  }
+  return true;
 }
 
 bool confident_at_radius(const ObjectEstimate& object, double radius_cm) {
@@ -229,7 +327,9 @@ ObservedView observe(SceneEstimator::State& s, const datasets::SceneView& view,
   observed.image = render::Intrinsics::from_camera(view.camera);
   const render::Intrinsics& image = observed.image;
   cv::Mat labels;
-  const bool need_labels = view.detections.empty();
+  // The synthetic detector only when no detections file is attached: an image the file has
+  // no entries for has no detections.
+  const bool need_labels = !view.detections;
   const bool measured = options.observation == Observation::kMeasured;
   result->observation = to_string(options.observation);
   datasets::SceneView scaled = view;
@@ -277,7 +377,7 @@ ObservedView observe(SceneEstimator::State& s, const datasets::SceneView& view,
   // Visibility of each GT instance (evaluation, and the synthetic detector's silhouettes).
   observed.counts = s.renderer.count_visibility(image, render::scene_instances(view, s.models));
 
-  observed.detections = view.detections;
+  if (view.detections) observed.detections = *view.detections;
   result->detections = "attached";
   if (need_labels) {
     // Silhouette sizes only where the amodal test needs them (they also make the scores fall

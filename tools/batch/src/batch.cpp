@@ -125,7 +125,7 @@ void run_worker(const BatchJob& job, const BatchOptions& options, WorkQueue& que
         queue.add_item_seconds(
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
       }
-      progress.item_done();
+      progress.item_done(!failure);
     } catch (...) {
       queue.abort(std::current_exception());
       break;
@@ -269,7 +269,8 @@ BatchResult run_batch(const BatchJob& job, const BatchOptions& options) {
     for (std::thread& worker : workers) worker.join();
   }
 
-  result.computed = std::min(queue.next.load(), queue.todo.size());
+  // A failed item is not computed: stderr, run.json and summary.json count the same images.
+  result.computed = std::min(queue.next.load(), queue.todo.size()) - queue.failed;
   result.failed = queue.failed;
   if (job.input_digest) files.save();
   if (queue.first_error) {

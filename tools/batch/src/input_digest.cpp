@@ -153,8 +153,11 @@ void add_view(Digest& digest, const datasets::SceneView& view) {
     for (const int instance : view.graph->fixed) digest.add(instance);
     digest.add(view.graph->inferred);
   }
-  digest.add(static_cast<std::uint64_t>(view.detections.size()));
-  for (const datasets::Detection& detection : view.detections) {
+  // (Whether a file is attached at all is in the job's fingerprint.)
+  const std::vector<datasets::Detection> none;
+  const std::vector<datasets::Detection>& detections = view.detections ? *view.detections : none;
+  digest.add(static_cast<std::uint64_t>(detections.size()));
+  for (const datasets::Detection& detection : detections) {
     digest.add(detection.obj_id).add(detection.score).add_matrix(detection.bbox);
     digest.add(detection.time);
   }

@@ -71,7 +71,60 @@ void check_folders_above(const fs::path& path, const fs::path& as_given) {
   }
 }
 
+// BOP scene folders are named by six digits (000000, 000048, ...).
+bool is_scene_folder_name(const std::string& name) {
+  return name.size() == 6 &&
+         std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+
+bool holds_scene_files(const fs::path& dir) {
+  std::error_code error;
+  return fs::is_regular_file(dir / "scene_gt.json", error) ||
+         fs::is_regular_file(dir / "scene_camera.json", error);
+}
+
+// What `dir` is in a BOP dataset, with the file that shows it; nullopt for anything else
+// (a dataset's root, a results folder, an unrelated folder).
+std::optional<std::pair<std::string, fs::path>> dataset_content(const fs::path& dir) {
+  std::error_code error;
+  if (!fs::is_directory(dir, error)) return std::nullopt;
+  if (holds_scene_files(dir)) {
+    const fs::path shown = fs::exists(dir / "scene_gt.json", error) ? dir / "scene_gt.json"
+                                                                    : dir / "scene_camera.json";
+    return std::pair{std::string("scene folder"), shown};
+  }
+  if (fs::is_regular_file(dir / "models_info.json", error)) {
+    return std::pair{std::string("models folder"), dir / "models_info.json"};
+  }
+  // A split folder (test, train_pbr, val, ...) holds scene folders; the first one is named.
+  std::optional<fs::path> first;
+  for (const auto& entry : fs::directory_iterator(dir, error)) {
+    if (is_scene_folder_name(entry.path().filename().string()) && holds_scene_files(entry.path()) &&
+        (!first || entry.path() < *first)) {
+      first = entry.path();
+    }
+  }
+  if (first) return std::pair{std::string("split folder"), *first};
+  return std::nullopt;
+}
+
 }  // namespace
+
+void refuse_dataset_content(const fs::path& path, const std::string& what) {
+  const fs::path target = normalized(path);
+  for (fs::path dir = target; !dir.empty(); dir = dir.parent_path()) {
+    if (const auto content = dataset_content(dir)) {
+      const std::string where =
+          dir == target ? " is a dataset's " : " is inside " + dir.string() + ", a dataset's ";
+      throw UsageError(what + " " + path.string() + where + content->first + " (it holds " +
+                       content->second.string() +
+                       "): a dataset's split, scene and models folders are not written to, so "
+                       "that the dataset stays readable; choose another " +
+                       what);
+    }
+    if (dir == dir.root_path()) break;
+  }
+}
 
 std::optional<FolderOwner> folder_owner(const fs::path& dir) {
   std::error_code error;
@@ -88,6 +141,7 @@ std::optional<FolderOwner> folder_owner(const fs::path& dir) {
 
 void claim_output_folder(const fs::path& dir, const std::string& command) {
   const fs::path path = normalized(dir);
+  refuse_dataset_content(dir, "--out");
   check_folders_above(path, dir);
   std::error_code error;
   if (!fs::exists(path, error)) return;
@@ -115,13 +169,20 @@ void claim_output_folder(const fs::path& dir, const std::string& command) {
   }
 }
 
-void claim_output_file(const fs::path& file) {
+void claim_output_file(const fs::path& file, const std::string& option, const std::string& command,
+                       const std::function<bool(const fs::path&)>& written_by_command) {
   const fs::path path = normalized(file);
   std::error_code error;
   if (fs::is_directory(path, error)) {
-    throw UsageError(file.string() + " is a folder; --out names the output file");
+    throw UsageError(file.string() + " is a folder; " + option + " names the output file");
   }
+  refuse_dataset_content(file, option);
   check_folders_above(path, file);
+  if (fs::exists(path, error) && !written_by_command(path)) {
+    throw UsageError(option + " " + file.string() + " exists and is not a file `" + command +
+                     "` wrote; it is not replaced: choose another " + option +
+                     ", or remove the file yourself");
+  }
 }
 
 void mark_output_folder(const fs::path& dir, const std::string& command) {

@@ -45,9 +45,10 @@ std::string Progress::format_duration(double seconds) {
   return buffer;
 }
 
-void Progress::item_done() {
+void Progress::item_done(bool ok) {
   std::lock_guard<std::mutex> lock(mutex_);
   ++computed_;
+  if (!ok) ++failed_;
   draw_locked(false);
 }
 
@@ -79,7 +80,7 @@ void Progress::finish(std::size_t failed) {
   const double elapsed = elapsed_seconds();
   const double rate = elapsed > 0 ? computed_ / elapsed : 0.0;
   std::cerr << label_ << ": " << already_done_ + computed_ << "/" << total_ << " " << unit_ << " ("
-            << computed_ << " computed, " << already_done_ << " resumed, " << failed
+            << computed_ - failed_ << " computed, " << already_done_ << " resumed, " << failed
             << " failed) in " << format_fixed(elapsed, 1) << " s, " << format_fixed(rate, 1) << " "
             << unit_ << "/s\n"
             << std::flush;

@@ -6,17 +6,38 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <clutterscope/batch/batch.hpp>
+#include <clutterscope/scene_estimation/scene_estimate.hpp>
 #include <cmath>
+#include <cstdio>
 #include <ctime>
 #include <exception>
 #include <functional>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <vector>
 
 namespace clutterscope::cli {
 
 using BenchClock = std::chrono::steady_clock;
+
+// A bench visibility workload must fit in half the memory: about 64 bytes a triangle of its
+// meshes (vertices, normals, indices and the GPU copy) and 128 bytes a pose. `sizes` names the
+// options that set the counts, e.g. "--objects x --triangles". Throws batch::UsageError.
+inline void check_workload_memory(const std::string& command, const std::string& sizes,
+                                  double triangles, double poses) {
+  const double budget = static_cast<double>(scene_estimation::physical_memory_bytes() / 2);
+  const double bytes = 64 * triangles + 128 * poses;
+  if (bytes <= budget) return;
+  char text[256];
+  std::snprintf(text, sizeof(text),
+                "%s: the workload needs about %.1f GiB (%.3g triangles at 64 bytes, %.3g poses at "
+                "128), more than half of this machine's %.1f GiB of memory: lower %s",
+                command.c_str(), bytes / (1ull << 30), triangles, poses, 2 * budget / (1ull << 30),
+                sizes.c_str());
+  throw batch::UsageError(text);
+}
 
 inline double seconds_since(BenchClock::time_point start) {
   return std::chrono::duration<double>(BenchClock::now() - start).count();

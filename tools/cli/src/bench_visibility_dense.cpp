@@ -494,6 +494,10 @@ void run_dense_visibility_bench(const DenseBenchArguments& arguments) {
         "bench visibility --dense: --images, --models, --objects-min <= --objects-max, --jobs >= "
         "1, 20 <= --triangles-min <= --triangles-max, --width/--height >= 8, --job-images >= 0");
   }
+  check_workload_memory(
+      "bench visibility --dense", "--models x --triangles-max, or --images",
+      double(arguments.models) * arguments.max_triangles,
+      double(std::max(arguments.images, arguments.job_images)) * arguments.max_objects);
   DenseWorkload workload = make_dense_workload(arguments);
   std::size_t model_triangles_min = SIZE_MAX, model_triangles_max = 0;
   for (const MeshPointer& mesh : workload.models_mm) {

@@ -11,6 +11,7 @@
 #include <atomic>
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/formats.hpp>
+#include <clutterscope/batch/output_folder.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/files.hpp>
 #include <clutterscope/estimator/confidence.hpp>
@@ -21,6 +22,7 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -268,12 +270,22 @@ std::string optional_text(const std::optional<double>& value, int significant) {
   return value ? batch::format_general(*value, significant) : std::string();
 }
 
+constexpr const char* kCsvHeader =
+    "dataset,split,scene_id,im_id,gt_id,obj_id,visib_fract,err_cm,err_x_cm,err_y_cm,err_z_cm,"
+    "var_x_cm2,var_y_cm2,var_z_cm2,nees,radius95_cm,confident,confident_radius,ess_min,"
+    "consistent,failure\n";
+
+// A CSV an earlier run wrote: it starts with the header (--csv replaces nothing else).
+bool written_by_bench_calibration(const fs::path& path) {
+  std::ifstream file(path, std::ios::binary);
+  std::string header(std::char_traits<char>::length(kCsvHeader), '\0');
+  file.read(header.data(), static_cast<std::streamsize>(header.size()));
+  return file && header == kCsvHeader;
+}
+
 void write_csv(const std::vector<CalibrationRow>& rows,
                const BenchCalibrationArguments& arguments) {
-  std::string text =
-      "dataset,split,scene_id,im_id,gt_id,obj_id,visib_fract,err_cm,err_x_cm,err_y_cm,err_z_cm,"
-      "var_x_cm2,var_y_cm2,var_z_cm2,nees,radius95_cm,confident,confident_radius,ess_min,"
-      "consistent,failure\n";
+  std::string text = kCsvHeader;
   const auto& radius = arguments.estimate.confidence_radius_cm;
   for (const CalibrationRow& row : rows) {
     const scene_estimation::ObjectEstimate& object = row.object;
@@ -305,6 +317,10 @@ void run_bench(BenchCalibrationArguments arguments) {
   if (!arguments.estimate.IsValid(&why)) throw batch::UsageError(why);
   if (arguments.scenes < 1) throw batch::UsageError("--scenes must be >= 1");
   if (arguments.hidden < 0) throw batch::UsageError("--hidden must be >= 0");
+  if (!arguments.csv.empty()) {
+    batch::claim_output_file(arguments.csv, "--csv", "bench calibration",
+                             written_by_bench_calibration);
+  }
   const int jobs = arguments.jobs > 0
                        ? arguments.jobs
                        : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -371,7 +387,10 @@ void add_bench_calibration_command(CLI::App& app, int* exit_code) {
                    "generator seed (default: held out, unlike the bundled samples' 4 and 7)")
       ->capture_default_str();
   command->add_option("--jobs", arguments->jobs, "estimation threads (default: the cores)");
-  command->add_option("--csv", arguments->csv, "also write the per-object rows to this CSV file");
+  command->add_option(
+      "--csv", arguments->csv,
+      "also write the per-object rows to this CSV file (an existing file is replaced only when "
+      "bench calibration wrote it)");
   command->add_flag("--quiet", arguments->quiet, "no progress lines on stderr");
   add_estimator_options(*command, arguments->estimate);
   command->callback([arguments, exit_code] {

@@ -176,6 +176,19 @@ void run_bench(const BenchEstimateArguments& arguments) {
       particles.empty() || particles.front() < 2)
     throw batch::UsageError("bench estimate: --images, --iterations >= 1, particles >= 2");
   if (arguments.rounds < 1) throw batch::UsageError("bench estimate: --rounds must be >= 1");
+  scene_estimation::EstimateOptions options;
+  options.particles = arguments.particles;
+  options.iterations = arguments.iterations;
+  options.seed = arguments.seed;
+  options.proxy_triangles = arguments.proxy_triangles;
+  options.proxy_tolerance_m = 1e-3 * arguments.proxy_tolerance_mm;
+  options.grid_pixels = arguments.grid_pixels;
+  // The estimator's bounds (memory among them) at the largest M measured.
+  scene_estimation::EstimateOptions largest = options;
+  largest.particles =
+      std::max(arguments.particles, *std::max_element(particles.begin(), particles.end()));
+  std::string why;
+  if (!largest.IsValid(&why)) throw batch::UsageError("bench estimate: " + why);
   const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
   datasets::DatasetSelection selection;
   selection.splits = {arguments.split};
@@ -184,13 +197,6 @@ void run_bench(const BenchEstimateArguments& arguments) {
   std::vector<datasets::SceneView> views;
   for (const auto& key : keys) views.push_back(dataset.load(key));
 
-  scene_estimation::EstimateOptions options;
-  options.particles = arguments.particles;
-  options.iterations = arguments.iterations;
-  options.seed = arguments.seed;
-  options.proxy_triangles = arguments.proxy_triangles;
-  options.proxy_tolerance_m = 1e-3 * arguments.proxy_tolerance_mm;
-  options.grid_pixels = arguments.grid_pixels;
   std::printf("dataset %s: %zu images, M = %d, %d iterations\n", arguments.dataset.c_str(),
               views.size(), arguments.particles, arguments.iterations);
   print_proxies(dataset, options);

@@ -256,6 +256,9 @@ void run_bench(const BenchArguments& arguments) {
         "bench visibility: --images, --objects, --jobs >= 1, --triangles >= 12, "
         "--width/--height >= 8");
   }
+  check_workload_memory("bench visibility", "--objects x --triangles, or --images",
+                        double(arguments.objects) * arguments.triangles,
+                        double(arguments.images) * arguments.objects);
   const Workload workload = make_workload(arguments);
   std::size_t triangles = 0;
   for (const datasets::Mesh& mesh : workload.meshes) triangles += mesh.triangle_count();

@@ -36,7 +36,8 @@ struct DetectArguments {
 void run_detect(const DetectArguments& arguments) {
   std::string why;
   if (!arguments.detector.IsValid(&why)) throw batch::UsageError(why);
-  batch::claim_output_file(arguments.out);
+  batch::claim_output_file(arguments.out, "--out", "detect",
+                           datasets::written_by_detections_writer);
   const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
   datasets::DatasetSelection selection;
   selection.splits = {arguments.split};
@@ -110,7 +111,10 @@ void add_detect_command(CLI::App& app, int* exit_code) {
       "hidden instance gets its amodal box (the silhouette it would have unoccluded) with a "
       "low score. Tray and table instances (fixed) are not detected.");
   command->add_option("DATASET", arguments->dataset, "BOP dataset folder")->required();
-  command->add_option("--out", arguments->out, "output JSON file")->required();
+  command
+      ->add_option("--out", arguments->out,
+                   "output JSON file (an existing file is replaced only when detect wrote it)")
+      ->required();
   command->add_option("--split", arguments->split, "split folder")->capture_default_str();
   command->add_option("--scenes", arguments->scenes, "scene ids, e.g. 1,2,5-7 (default all)");
   command->add_option("--seed", arguments->seed, "random seed")->capture_default_str();

@@ -138,9 +138,12 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
 void add_estimate_options(CLI::App& command, scene_estimation::EstimateJobOptions* arguments) {
   add_dataset_options(command, &arguments->dataset);
   add_estimator_options(command, arguments->estimate);
-  command.add_option("--detections", arguments->detections,
-                     "BOP 2D detections JSON (default: the synthetic detector on the rendered "
-                     "GT labels)");
+  command
+      .add_option("--detections", arguments->detections,
+                  "BOP 2D detections JSON: every image's detections come from it (an image "
+                  "without entries has none); 'synthetic' (default): the synthetic detector "
+                  "on the rendered GT labels (100% recall), named on stderr")
+      ->type_name("FILE|synthetic");
   command.add_option("--seed", arguments->estimate.seed, "random seed (per-image streams)")
       ->capture_default_str();
   command.add_flag("--save-beliefs", arguments->save_beliefs,

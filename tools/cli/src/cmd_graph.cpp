@@ -4,6 +4,7 @@
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/cli/dataset_options.hpp>
 #include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/datasets/files.hpp>
 #include <clutterscope/datasets/graph_inference.hpp>
 #include <iostream>
 #include <map>
@@ -38,6 +39,7 @@ void run_graph(const GraphArguments& arguments) {
       "scene", std::filesystem::path(arguments.dataset) / arguments.split);
   std::map<datasets::GravitySource, int> sources;
   nlohmann::ordered_json printed;
+  std::map<std::filesystem::path, std::string> to_write;  // written once all are inferred
   for (const int scene_id : scene_ids) {
     datasets::DatasetSelection selection;
     selection.splits = {arguments.split};
@@ -54,13 +56,22 @@ void run_graph(const GraphArguments& arguments) {
     const std::string json = datasets::scene_graphs_json(graphs);
     const std::string folder = datasets::six_digits(scene_id);
     if (arguments.write) {
-      datasets::write_file_atomically(
-          std::filesystem::path(arguments.dataset) / arguments.split / folder / "scene_graph.json",
-          json);
+      to_write[std::filesystem::path(arguments.dataset) / arguments.split / folder /
+               "scene_graph.json"] = json;
     } else {
       printed[std::to_string(scene_id)] = nlohmann::json::parse(json);
     }
   }
+  // A scene's own graph (annotated, or published with the dataset) is the dataset's: it is
+  // not replaced, and nothing is written unless every file can be.
+  for (const auto& [path, json] : to_write) {
+    if (std::filesystem::exists(path) && datasets::read_file(path) != json) {
+      throw batch::UsageError("--write: " + path.string() +
+                              " exists and differs from the inferred graph; a scene's "
+                              "scene_graph.json is not replaced: remove it first to replace it");
+    }
+  }
+  for (const auto& [path, json] : to_write) datasets::write_file_atomically(path, json);
   if (!arguments.write) std::cout << printed.dump(1) << "\n";
   std::cerr << "graph: " << scene_ids.size() << " scenes; gravity frame from";
   for (const auto& [source, count] : sources) {
@@ -83,8 +94,9 @@ void add_graph_command(CLI::App& app, int* exit_code) {
   command->add_option("DATASET", arguments->dataset, "BOP dataset folder")->required();
   command->add_option("--split", arguments->split, "split folder")->capture_default_str();
   command->add_option("--scenes", arguments->scenes, "scene ids, e.g. 1,2,5-7 (default all)");
-  command->add_flag("--write", arguments->write,
-                    "write SPLIT/SCENE/scene_graph.json (replacing an existing one)");
+  command->add_flag(
+      "--write", arguments->write,
+      "write SPLIT/SCENE/scene_graph.json (an existing one that differs is not replaced)");
   command->add_option("--contact-tolerance-mm", arguments->contact_tolerance_mm, "delta d (mm)")
       ->capture_default_str();
   command

@@ -2,7 +2,7 @@
 
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/notebooks_export/notebook.hpp>
-#include <clutterscope/report/report.hpp>
+#include <clutterscope/report/report_job.hpp>
 #include <iostream>
 #include <memory>
 
@@ -22,22 +22,14 @@ void run_notebook_command(const NotebookCommandOptions& options) {
   notebook.generator = std::string("clutterscope ") + CLUTTERSCOPE_VERSION;
   std::string why;
   if (!notebook.IsValid(&why)) throw CLI::ValidationError("notebook", why);  // NaN slips CLI11
-  try {
-    const notebooks_export::NotebookSummary summary =
-        notebooks_export::write_clutter_notebook(options.report_dir, notebook);
-    std::cout << "wrote " << summary.path.string() << " (" << summary.code_cells << " code and "
-              << summary.markdown_cells << " markdown cells); open it in Jupyter, or run it "
-              << "headless: jupyter nbconvert --to notebook --execute " << summary.path.string()
-              << "\n";
-  } catch (const notebooks_export::NotebookError& error) {
-    if (error.kind() == notebooks_export::NotebookError::Kind::kMissingReport) {
-      // The advice names an --out that `report` accepts (the library cannot know the owners).
-      throw datasets::DatasetError(error.file(),
-                                   "not found; the notebook reads a report folder: " +
-                                       report::report_advice(options.report_dir, "notebook"));
-    }
-    throw;
-  }
+  const report::ReportNotebook written =
+      report::write_report_notebook(options.report_dir, notebook);
+  const notebooks_export::NotebookSummary& summary = written.written;
+  if (!written.kept.empty()) std::cerr << report::notebook_kept_message(written) << "\n";
+  std::cout << "wrote " << summary.path.string() << " (" << summary.code_cells << " code and "
+            << summary.markdown_cells << " markdown cells); open it in Jupyter, or run it "
+            << "headless: jupyter nbconvert --to notebook --execute " << summary.path.string()
+            << "\n";
 }
 
 }  // namespace

@@ -160,10 +160,15 @@ class BoundSteps {
     parse_step_flags(step_command_line(options, "visibility"), &add_visibility_options,
                      &visibility);
     visibility_ = visibility.options();
+    // Both steps' bounds (the estimator's memory bounds among them) before the report folder
+    // is marked.
     std::string why;
     if (!visibility_.IsValid(&why) || !estimate_.IsValid(&why)) throw batch::UsageError(why);
     datasets::BopDataset dataset = batch::open_dataset(options.dataset);
-    if (!estimate_.detections.empty()) dataset.attach_detections(estimate_.detections);
+    if (!estimate_.detections.empty() &&
+        estimate_.detections != scene_estimation::kSyntheticDetections) {
+      dataset.attach_detections(estimate_.detections);
+    }
     batch::list_selected_images(dataset, options.dataset);
     visibility_fingerprint_ = visibility::visibility_job_fingerprint(visibility_);
     estimate_fingerprint_ = scene_estimation::estimate_job_fingerprint(estimate_, dataset);

@@ -3,6 +3,7 @@
 // same scene and poses (the measured depth filling in the background the GT lacks) are compared
 // with the GT render by the same statistics, printed side by side.
 
+#include <clutterscope/batch/output_folder.hpp>
 #include <clutterscope/batch/progress.hpp>
 #include <clutterscope/cli/dataset_options.hpp>
 #include <clutterscope/datasets/bop.hpp>
@@ -19,6 +20,7 @@
 #include <clutterscope/scene_estimation/synthetic_view.hpp>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -83,10 +85,26 @@ nlohmann::json summary_json(const datasets::ResidualSummary& s) {
            }()}};
 }
 
+// A statistics file an earlier run wrote: a JSON object with exactly the keys written below.
+bool written_by_sensor_fit(const std::filesystem::path& path) {
+  std::ifstream file(path, std::ios::binary);
+  const nlohmann::json json = nlohmann::json::parse(file, nullptr, /*allow_exceptions=*/false);
+  static const std::vector<std::string> kKeys = {"all_agree", "dataset", "measured",  "rows",
+                                                 "seed",      "sensor",  "simulated", "tolerance"};
+  std::vector<std::string> keys;
+  if (json.is_object()) {
+    for (const auto& item : json.items()) keys.push_back(item.key());  // sorted
+  }
+  return keys == kKeys;
+}
+
 int run_sensor_fit(const SensorFitArguments& arguments) {
   std::string why;
   if (!arguments.statistics.IsValid(&why)) throw batch::UsageError(why);
   if (!(arguments.tolerance > 0)) throw batch::UsageError("--tolerance must be > 0");
+  if (!arguments.json.empty()) {
+    batch::claim_output_file(arguments.json, "--json", "sensor-fit", written_by_sensor_fit);
+  }
   const datasets::SensorOptions sensor = arguments.sensor.resolve();
   const datasets::BopDataset dataset = open_dataset(arguments.dataset);
   const std::vector<datasets::ImageKey> keys =
@@ -231,7 +249,10 @@ void add_sensor_fit_command(CLI::App& app, int* exit_code) {
       ->add_option("--interior-margin", arguments->statistics.interior_margin_px,
                    "object pixels at least this many pixels from an edge are interior")
       ->capture_default_str();
-  command->add_option("--json", arguments->json, "also write the statistics to this JSON file");
+  command->add_option(
+      "--json", arguments->json,
+      "also write the statistics to this JSON file (an existing file is replaced only when "
+      "sensor-fit wrote it)");
   command->callback([arguments, exit_code] { *exit_code = run_sensor_fit(*arguments); });
 }
 

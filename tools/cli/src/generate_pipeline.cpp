@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <chrono>
 #include <clutterscope/batch/batch.hpp>
+#include <clutterscope/batch/output_folder.hpp>
 #include <clutterscope/batch/progress.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/files.hpp>
@@ -102,6 +103,7 @@ class StagingFolder {
 // Refuses an `out` that is a file, or a non-empty folder without --overwrite; with --overwrite
 // only a folder an earlier generate wrote (it has generator.json) is replaced.
 void check_out_folder(const fs::path& out, const fs::path& as_given, bool overwrite) {
+  batch::refuse_dataset_content(as_given, "--out");
   std::error_code error;
   const fs::file_status status = fs::status(out, error);
   if (!fs::exists(status)) return;

@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <chrono>
 #include <clutterscope/batch/formats.hpp>
+#include <clutterscope/batch/input_digest.hpp>
 #include <clutterscope/batch/output_folder.hpp>
 #include <clutterscope/batch/run_record.hpp>
 #include <clutterscope/batch/table_layouts.hpp>
@@ -12,6 +13,7 @@
 #include <clutterscope/report/report_job.hpp>
 #include <clutterscope/report/tables.hpp>
 #include <cmath>
+#include <iostream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -118,14 +120,17 @@ void write_notebook(const fs::path& dir, const ReportOptions& analysis) {
   options.variance_threshold_cm2 = analysis.variance_threshold_cm2;
   options.visibility_cutoff = analysis.visibility_cutoff;
   options.accurate_cm = analysis.accurate_cm;
-  try {
-    notebooks_export::write_clutter_notebook(dir, options);
-  } catch (const notebooks_export::NotebookError& error) {
-    if (error.kind() == notebooks_export::NotebookError::Kind::kMissingReport) {
-      throw datasets::DatasetError(error.file(), error.message());
-    }
-    throw;
-  }
+  const ReportNotebook notebook = write_report_notebook(dir, options);
+  if (!notebook.kept.empty()) std::cerr << notebook_kept_message(notebook) << "\n";
+}
+
+std::string digest_of(const std::string& bytes) { return batch::format_hex64(batch::xxh64(bytes)); }
+
+// clutter_report.ipynb, then clutter_report.new.ipynb, clutter_report.new-2.ipynb, ...
+std::string notebook_name(int k) {
+  if (k == 0) return notebooks_export::kNotebookFileName;
+  const std::string stem = fs::path(notebooks_export::kNotebookFileName).stem().string();
+  return stem + (k == 1 ? ".new" : ".new-" + std::to_string(k)) + ".ipynb";
 }
 
 // DIR/run.json: what this run did (times differ between runs, so they are kept here).
@@ -427,6 +432,53 @@ batch::BatchResult merge_report_shards(const batch::MergeOptions& options) {
     total.seconds += result.seconds;
   }
   return total;
+}
+
+ReportNotebook write_report_notebook(const fs::path& dir,
+                                     const notebooks_export::NotebookOptions& options) {
+  const std::string text =
+      notebooks_export::format_notebook(notebooks_export::make_clutter_notebook(options));
+  const fs::path record_path = dir / ".report" / "notebooks_written.json";
+  nlohmann::json record = nlohmann::json::object();
+  if (fs::exists(record_path)) record = datasets::read_json(record_path);
+  ReportNotebook notebook;
+  std::string name;
+  // The first name that is free, or holds a notebook as written here (or the new bytes).
+  for (int k = 0; name.empty(); ++k) {
+    const fs::path candidate = dir / notebook_name(k);
+    if (!fs::exists(candidate)) {
+      name = notebook_name(k);
+      break;
+    }
+    const std::string existing = datasets::read_file(candidate);
+    if (existing == text ||
+        (record.contains(notebook_name(k)) && record[notebook_name(k)] == digest_of(existing))) {
+      name = notebook_name(k);
+    } else if (k == 0) {
+      notebook.kept = candidate;
+    }
+  }
+  try {
+    notebook.written = notebooks_export::write_clutter_notebook(dir, options, name);
+  } catch (const notebooks_export::NotebookError& error) {
+    if (error.kind() == notebooks_export::NotebookError::Kind::kMissingReport) {
+      // The advice names an --out that `report` accepts (the notebook library cannot know).
+      throw datasets::DatasetError(
+          error.file(), "not found; the notebook reads a report folder: " +
+                            report_advice(dir, "notebook"));
+    }
+    throw;
+  }
+  record[name] = digest_of(text);
+  datasets::write_file_atomically(record_path, record.dump(2) + "\n");
+  return notebook;
+}
+
+std::string notebook_kept_message(const ReportNotebook& notebook) {
+  return notebook.kept.string() +
+         " changed since clutterscope wrote it (edits or outputs); it is kept, and the new "
+         "notebook is " +
+         notebook.written.path.string();
 }
 
 }  // namespace clutterscope::report

@@ -139,7 +139,8 @@ class BopDataset {
   std::vector<ModelInfo> models_;
   std::map<int, size_t> model_index_;
   std::optional<RootCamera> root_camera_;
-  std::map<std::tuple<int, int>, std::vector<Detection>> detections_;  // (scene, image)
+  // (scene, image) -> detections; absent when no file is attached.
+  std::optional<std::map<std::tuple<int, int>, std::vector<Detection>>> detections_;
   std::optional<TestTargets> targets_;
   std::filesystem::path targets_file_;
   std::unique_ptr<SceneCache> cache_;

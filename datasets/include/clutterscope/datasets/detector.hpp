@@ -62,6 +62,11 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
 // Streams a BOP 2D detections JSON list ({scene_id, image_id, category_id, score, bbox, time})
 // to a temporary file; finish() renames it into place, so memory stays constant and a killed
 // run leaves no partial file.
+// True when the file at `path` is exactly what a DetectionsWriter writes (its entries, keys
+// and layout, byte for byte): `detect --out` replaces only such a file, so another detector's
+// results, a dataset file or a file a user edited are never lost.
+bool written_by_detections_writer(const std::filesystem::path& path);
+
 class DetectionsWriter {
  public:
   explicit DetectionsWriter(std::filesystem::path path);

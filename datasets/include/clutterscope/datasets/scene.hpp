@@ -86,7 +86,9 @@ struct SceneView {
   Camera camera;
   std::vector<GtInstance> objects;
   std::optional<SceneGraph> graph;
-  std::vector<Detection> detections;
+  // The attached detections file's entries for this image (empty when it has none); absent
+  // when no file is attached (the estimator then runs the synthetic detector).
+  std::optional<std::vector<Detection>> detections;
   // Indices into `objects` of the instances BOP's bop19 test targets select; absent when every
   // instance is a target. The others still occlude: callers compute with all of them and
   // report only these.

@@ -66,8 +66,10 @@ std::string format_notebook(const nlohmann::json& notebook);
 
 // Writes report_dir/clutter_report.ipynb atomically (temporary file, then rename). Throws
 // NotebookError when report_dir has no objects.csv or the write fails, std::invalid_argument
-// for invalid options. Same options, same bytes.
+// for invalid options. Same options, same bytes. `file_name` replaces clutter_report.ipynb
+// (report::write_report_notebook writes beside a notebook a user changed).
 NotebookSummary write_clutter_notebook(const std::filesystem::path& report_dir,
-                                       const NotebookOptions& options);
+                                       const NotebookOptions& options,
+                                       const std::string& file_name = kNotebookFileName);
 
 }  // namespace clutterscope::notebooks_export

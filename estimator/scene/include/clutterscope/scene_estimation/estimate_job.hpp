@@ -13,12 +13,18 @@
 
 namespace clutterscope::scene_estimation {
 
+// --detections synthetic: the synthetic detector, built from the GT (100% recall), as without
+// --detections.
+inline constexpr const char* kSyntheticDetections = "synthetic";
+
 // Everything the `estimate` command's flags set.
 struct EstimateJobOptions {
   batch::DatasetOptions dataset;
   // The estimator's options; keep_history is set from save_beliefs by the job.
   EstimateOptions estimate;
-  std::string detections;     // BOP 2D detections JSON; empty: the synthetic detector
+  // BOP 2D detections JSON: every image's detections come from it (an image without entries
+  // has none). Empty or kSyntheticDetections: the synthetic detector on every image.
+  std::string detections;
   bool save_beliefs = false;  // also write the belief samples of every iteration
   bool no_time = false;       // times left empty / -1, so every output is byte-reproducible
   bool IsValid(std::string* why) const;
@@ -32,6 +38,10 @@ batch::BatchOutputSpec estimate_output_spec();
 // option sets with the same fingerprint compute the same results.
 nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
                                         const datasets::BopDataset& dataset);
+
+// "estimate: the detections of all 48 images (split test, scenes 1-2) come from the synthetic
+// detector, ...", printed on stderr (unless quiet) after a run without a detections file.
+std::string synthetic_detections_note(const std::vector<datasets::ImageKey>& images);
 
 // Runs (or resumes) the job into options.dataset.out. Throws batch::UsageError for invalid
 // options, datasets::DatasetError for bad data (see batch::run_batch), render::RenderError.

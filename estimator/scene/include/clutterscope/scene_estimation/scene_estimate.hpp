@@ -133,6 +133,23 @@ struct EstimateOptions {
   render::ModelCacheOptions model_cache() const;
 };
 
+// Physical memory of this machine: sysconf's physical pages x page size.
+std::uint64_t physical_memory_bytes();
+
+// The memory one object's estimate holds per particle M, in bytes: the particle's depth tile
+// of the scoring grid (grid_pixels^2 floats, once in the GL read-back and once in the atlas),
+// NBP's samples, messages and product draws and, with keep_history, its samples of every
+// iteration (3 doubles each). An image also holds the exact product's M x M tables.
+std::uint64_t estimate_bytes_per_particle(const EstimateOptions& options);
+
+// Upper bounds of the options that size allocations, derived from `memory_bytes`: one image's
+// estimate (M x 6 objects x estimate_bytes_per_particle + M^2 x 64 bytes, as measured on the
+// tray6 sample) may take at most half of it, which bounds particles, grid_pixels and, with
+// keep_history, iterations. False with "--particles must be <= 13573 here (...), got 100000000".
+// EstimateOptions::IsValid checks them against physical_memory_bytes(), before any work.
+bool check_memory_bounds(const EstimateOptions& options, std::uint64_t memory_bytes,
+                         std::string* why);
+
 // One belief sample in the camera frame (metres).
 struct BeliefSample {
   Eigen::Vector3d position;

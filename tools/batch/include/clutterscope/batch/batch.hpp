@@ -165,7 +165,7 @@ struct BatchJob {
 
 struct BatchResult {
   bool complete = false;          // final files written (false for a shard run)
-  std::size_t computed = 0;       // items processed by this run
+  std::size_t computed = 0;       // items this run computed a result for (failed ones not)
   std::size_t resumed = 0;        // items found finished from an earlier run
   std::size_t changed = 0;        // finished items recomputed because their inputs changed
   std::size_t failed = 0;         // failed items in the whole job (or this shard)

@@ -10,8 +10,11 @@
 // (a report's visibility/, estimate/ and beliefs/ belong to the report), and into a folder
 // that is not empty but has no marker (its files would be overwritten or mixed with results).
 // A new or empty folder, or one holding the same command's results, is fine.
+// Nothing is written into a dataset's split, scene or models folders (refuse_dataset_content),
+// and an output file replaces only a file the same command wrote.
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -28,9 +31,20 @@ std::optional<FolderOwner> folder_owner(const std::filesystem::path& dir);
 // Throws UsageError unless `command` may write its results into `dir` (rules above).
 void claim_output_folder(const std::filesystem::path& dir, const std::string& command);
 
-// Throws UsageError when `file` (an output file such as detect's JSON) is a folder, or lies
-// in (or below) a folder that holds a command's results. A dataset folder is fine.
-void claim_output_file(const std::filesystem::path& file);
+// The one rule every command that writes follows: throws UsageError, naming `what` (the
+// option, e.g. "--out") and the file that shows it, when `path` is or lies inside a BOP
+// dataset's scene folder (holds scene_gt.json or scene_camera.json), split folder (holds a
+// six-digit scene folder) or models folder (holds models_info.json). A dataset's root is fine:
+// results folders may sit beside its splits.
+void refuse_dataset_content(const std::filesystem::path& path, const std::string& what);
+
+// Throws UsageError when `file` (an output file such as detect's JSON, named by `option`) is
+// a folder, lies in a dataset's split, scene or models folder, lies in (or below) a folder that
+// holds a command's results, or exists and `written_by_command(file)` says `command` did not
+// write it. A dataset's root folder is fine.
+void claim_output_file(const std::filesystem::path& file, const std::string& option,
+                       const std::string& command,
+                       const std::function<bool(const std::filesystem::path&)>& written_by_command);
 
 // Writes DIR/.COMMAND/job.json, the marker of a command without a batch job file. Call it
 // after claim_output_folder, before writing results.

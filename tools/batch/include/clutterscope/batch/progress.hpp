@@ -20,10 +20,13 @@ class Progress {
   Progress(std::string label, std::size_t total, std::size_t already_done, Style style,
            std::string unit = "images");
 
-  // One more item done by this run. Thread-safe; cheap when no redraw is due.
-  void item_done();
-  // Clears the bar and prints one line: "label: 120/120 images (100 computed, 20 resumed,
-  // 0 failed) in 3.2 s, 31.4 images/s". Printed unless quiet.
+  // One more item done by this run, with a result (ok) or failed. Thread-safe; cheap when no
+  // redraw is due.
+  void item_done(bool ok = true);
+  // Clears the bar and prints one line: "label: 120/120 images (99 computed, 20 resumed,
+  // 1 failed) in 3.2 s, 31.4 images/s". "computed" counts the items this run computed a result
+  // for (a failed one is not computed: summary.json's images_computed and run.json's computed
+  // count the same); `failed` is the job's failed items. Printed unless quiet.
   void finish(std::size_t failed);
 
   double elapsed_seconds() const;
@@ -40,7 +43,8 @@ class Progress {
   std::size_t already_done_;
   Style style_;
   std::mutex mutex_;
-  std::size_t computed_ = 0;
+  std::size_t computed_ = 0;  // items done by this run, failed ones included
+  std::size_t failed_ = 0;    // of them, failed
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point last_draw_;
   bool drawn_ = false;

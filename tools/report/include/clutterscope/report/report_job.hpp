@@ -27,6 +27,7 @@
 
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/dataset_selection.hpp>
+#include <clutterscope/notebooks_export/notebook.hpp>
 #include <clutterscope/report/report.hpp>
 #include <filesystem>
 #include <functional>
@@ -96,6 +97,26 @@ nlohmann::json report_fingerprint(const ReportJobOptions& options, const ReportS
 // not be the report's (batch::claim_output_folder: another command's results, a non-empty
 // folder that is not a report folder).
 void prepare_report_folder(const std::filesystem::path& dir, const nlohmann::json& fingerprint);
+
+// A notebook written by write_report_notebook.
+struct ReportNotebook {
+  notebooks_export::NotebookSummary written;
+  // DIR/clutter_report.ipynb when it changed since clutterscope wrote it (edits, or outputs
+  // saved by running it) and was kept; written.path is then the new notebook beside it.
+  std::filesystem::path kept;
+};
+
+// Writes DIR/clutter_report.ipynb (notebooks_export::write_clutter_notebook) without losing
+// what a user wrote: a notebook is replaced only when its bytes are those recorded in
+// DIR/.report/notebooks_written.json (the xxh64 digest of each notebook written) or the new
+// bytes; otherwise it is kept and the new one is clutter_report.new.ipynb (then .new-2, ...).
+// Throws datasets::DatasetError when DIR has no objects.csv.
+ReportNotebook write_report_notebook(const std::filesystem::path& dir,
+                                     const notebooks_export::NotebookOptions& options);
+
+// "DIR/clutter_report.ipynb changed since clutterscope wrote it (...); it is kept, and the new
+// notebook is DIR/clutter_report.new.ipynb", for stderr.
+std::string notebook_kept_message(const ReportNotebook& notebook);
 
 // Runs the whole report: estimate, then visibility, then the analysis, the belief figures and
 // the files. Throws batch::UsageError for invalid options or a folder of another job, and what
