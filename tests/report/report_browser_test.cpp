@@ -99,7 +99,7 @@ TEST(ReportBrowser, ChromiumLoadsReportWithoutErrorsAndEveryPlotHasASize) {
   ASSERT_TRUE(std::filesystem::exists(screenshot)) << log;
   EXPECT_GT(std::filesystem::file_size(screenshot), 10000u);
   // Keep the screenshot in the build folder for people to look at.
-  const std::filesystem::path kept = std::filesystem::path(CLUTTERSCOPE_BINARY).parent_path() /
+  const std::filesystem::path kept = std::filesystem::path(CLUTTERSCOPE_BUILD_DIR) /
                                      "test_artifacts" / "report_browser_screenshot.png";
   std::filesystem::create_directories(kept.parent_path());
   std::filesystem::copy_file(screenshot, kept, std::filesystem::copy_options::overwrite_existing);
