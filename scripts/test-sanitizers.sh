@@ -56,8 +56,12 @@ suite() {
   # Without --unit, the end-to-end suites too (tests/CMakeLists.txt).
   local leave_out='fuzz-regression|end-to-end'
   if [ "$unit" = 0 ]; then leave_out='fuzz-regression'; fi
+  # Left out (it runs in the normal suite): the decimation of a 500k-triangle sphere, the code
+  # Decimate.SphereMeetsTheCapClosedAndOutward runs under the sanitizers on 16k triangles; it
+  # took 523 s under ASan + UBSan (clang, 2 loaded cores, 2026-12-04), 3.7 s CPU in Release.
+  local scan_sized='Decimate\.ScanSizedSphereReachesTheCap'
   # 1. Every test without GL, leaks included (the fuzz regressions are their own step).
-  run_ctest -j "$jobs" -L unit -LE "$leave_out" -E "$memory_test"
+  run_ctest -j "$jobs" -L unit -LE "$leave_out" -E "$memory_test|^$scan_sized$"
   # 2. The constant-memory tests measure RSS: ASan's quarantine keeps freed blocks (256 MB by
   #    default), so without it RSS shows our allocations, not the quarantine filling up
   #    (Batch.ResultsAreNotHeldInMemory: 423 MB growth with it, 12 MB without, clang 14).
