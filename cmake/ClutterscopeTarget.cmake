@@ -10,9 +10,11 @@ function(clutterscope_configure_target target)
     # libstdc++'s std::regex / std::function (seen in notebook_test.cpp); the normal build keeps
     # the warning.
     target_compile_options(${target} PRIVATE -Wno-maybe-uninitialized)
-    # -O1, as AddressSanitizer's documentation advises, after the build type's -O3 so it wins:
-    # GCC 12 with ASan + UBSan took 67 s for cmd_graph.cpp at -O3 and 32 s at -O1 (2026-12-03),
-    # and the sanitizer build is most of CI's time.
+  endif()
+  if(CLUTTERSCOPE_ASAN OR CLUTTERSCOPE_UBSAN OR CLUTTERSCOPE_FUZZ)
+    # -O1, as AddressSanitizer's and libFuzzer's documentation advise, after the build type's -O3
+    # so it wins: GCC 12 with ASan + UBSan took 67 s for cmd_graph.cpp at -O3 and 32 s at -O1
+    # (2026-12-03), and the sanitizer build is most of CI's time.
     target_compile_options(${target} PRIVATE -O1)
   endif()
   if(CLUTTERSCOPE_UBSAN)
@@ -20,7 +22,9 @@ function(clutterscope_configure_target target)
     target_link_options(${target} PRIVATE -fsanitize=undefined)
   endif()
   if(CLUTTERSCOPE_FUZZ)
-    # Coverage instrumentation for libFuzzer; the fuzz executables add -fsanitize=fuzzer.
+    # Coverage instrumentation for libFuzzer; the fuzz executables add -fsanitize=fuzzer. The
+    # other executables (the test suites, clutterscope) link without libFuzzer: the ASan runtime
+    # has the coverage callbacks, so one tree serves the fuzz targets and the suites.
     target_compile_options(${target} PRIVATE -fsanitize=fuzzer-no-link,address,undefined
                                              -fno-sanitize-recover=undefined -fno-omit-frame-pointer)
     target_link_options(${target} PRIVATE -fsanitize=address,undefined)

@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer targets of tests/fuzz into build-fuzz/ (clang, ASan + UBSan) and runs
-# each one from its seed corpus (tests/fuzz/corpus/NAME) and its saved crash inputs
-# (tests/fuzz/regressions/NAME) for CLUTTERSCOPE_FUZZ_SECONDS seconds (default 25), as many
-# targets at a time as CLUTTERSCOPE_BUILD_JOBS (default: the number of cores).
+# Builds the libFuzzer targets of tests/fuzz in build-san/ (clang, ASan + UBSan; the tree of
+# scripts/test-sanitizers.sh, see scripts/sanitizer-env.sh) and runs each one from its seed
+# corpus (tests/fuzz/corpus/NAME) and its saved crash inputs (tests/fuzz/regressions/NAME) for
+# CLUTTERSCOPE_FUZZ_SECONDS seconds (default 25), as many targets at a time as
+# CLUTTERSCOPE_BUILD_JOBS (default: the number of cores).
 # Arguments: target names (default: every target with a corpus folder).
-# New inputs go to build-fuzz/fuzz-corpus/NAME, crash inputs to build-fuzz/fuzz-artifacts/NAME,
-# the fuzzer's log to build-fuzz/fuzz-logs/NAME.log. Fails when any target crashes, leaks,
+# New inputs go to build-san/fuzz-corpus/NAME, crash inputs to build-san/fuzz-artifacts/NAME,
+# the fuzzer's log to build-san/fuzz-logs/NAME.log. Fails when any target crashes, leaks,
 # hangs (CLUTTERSCOPE_FUZZ_TIMEOUT seconds for one input, default 10) or runs out of memory.
 # CLUTTERSCOPE_FUZZ_NO_BUILD=1 skips the build.
 set -euo pipefail
@@ -17,9 +18,8 @@ jobs="${CLUTTERSCOPE_BUILD_JOBS:-$(nproc)}"
 
 if [ "${CLUTTERSCOPE_FUZZ_NO_BUILD:-0}" != 1 ]; then
   start=$SECONDS
-  cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_FLAGS=-g1 \
-    -DCMAKE_CXX_COMPILER=clang++ -DCLUTTERSCOPE_FUZZ=ON "${CLUTTERSCOPE_LAUNCHER[@]}" >/dev/null
-  cmake --build build-fuzz --parallel "$jobs" --target clutterscope_fuzz_targets
+  configure_sanitizer_tree
+  cmake --build "$sanitizer_tree" --parallel "$jobs" --target clutterscope_fuzz_targets
   echo "fuzz: build took $((SECONDS - start)) s"
 fi
 
@@ -31,10 +31,10 @@ fi
 # Runs one target; its result goes to $log.status (the exit status) for the summary below.
 fuzz_one() {
   local target="$1"
-  local binary="build-fuzz/tests/fuzz/fuzz_$target"
-  local work="build-fuzz/fuzz-corpus/$target"
-  local artifacts="build-fuzz/fuzz-artifacts/$target"
-  local log="build-fuzz/fuzz-logs/$target.log"
+  local binary="build-san/tests/fuzz/fuzz_$target"
+  local work="build-san/fuzz-corpus/$target"
+  local artifacts="build-san/fuzz-artifacts/$target"
+  local log="build-san/fuzz-logs/$target.log"
   mkdir -p "$work" "$artifacts" "$(dirname "$log")"
   local inputs=("tests/fuzz/corpus/$target")
   if [ -d "tests/fuzz/regressions/$target" ]; then inputs+=("tests/fuzz/regressions/$target"); fi
@@ -48,14 +48,14 @@ fuzz_one() {
 # One target per core at a time: each runs its full time, the smoke takes 1/jobs of the wall time.
 for target in "${targets[@]}"; do
   while [ "$(jobs -rp | wc -l)" -ge "$jobs" ]; do wait -n || true; done
-  rm -f "build-fuzz/fuzz-logs/$target.log.status"
+  rm -f "build-san/fuzz-logs/$target.log.status"
   fuzz_one "$target" &
 done
 wait
 
 failed=()
 for target in "${targets[@]}"; do
-  log="build-fuzz/fuzz-logs/$target.log"
+  log="build-san/fuzz-logs/$target.log"
   if ! read -r status elapsed 2>/dev/null <"$log.status"; then
     echo "fuzz: $target: FAILED, the run left no result (log $log)"
     failed+=("$target")

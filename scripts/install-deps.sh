@@ -6,7 +6,8 @@ set -euo pipefail
 packages=(
   # toolchain (ccache is used when present)
   build-essential cmake ninja-build pkg-config git ccache
-  # fuzzing: clang with libFuzzer and the sanitizer runtimes (scripts/fuzz.sh)
+  # the sanitizer tree: clang with libFuzzer and the sanitizer runtimes (scripts/test-sanitizers.sh,
+  # scripts/fuzz.sh)
   clang libclang-rt-14-dev
   # libraries
   libeigen3-dev nlohmann-json3-dev libcli11-dev libglm-dev libnanoflann-dev

@@ -1,5 +1,5 @@
-# Sourced by scripts/test-sanitizers.sh and scripts/fuzz.sh: sanitizer runtime options and the
-# ccache launcher (when ccache is installed).
+# Sourced by scripts/test-sanitizers.sh and scripts/fuzz.sh: sanitizer runtime options, the
+# ccache launcher (when ccache is installed) and the one sanitizer tree both use.
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 # Stop at the first error, with a stack; leaks are errors too, except the GL driver's
 # (tests/sanitizers/lsan.supp says why each is there).
@@ -10,3 +10,13 @@ CLUTTERSCOPE_LAUNCHER=()
 if command -v ccache >/dev/null; then
   CLUTTERSCOPE_LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 fi
+
+# build-san/: clang, ASan + UBSan on everything, our code at -O1 with line tables, test code at
+# -O0 (tests/CMakeLists.txt), and libFuzzer's coverage instrumentation, so that the same objects
+# serve the test suites and the fuzz targets (CLUTTERSCOPE_FUZZ, cmake/ClutterscopeTarget.cmake).
+sanitizer_tree="$root/build-san"
+configure_sanitizer_tree() {
+  cmake -S "$root" -B "$sanitizer_tree" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+    -DCMAKE_CXX_FLAGS=-g1 -DCMAKE_CXX_COMPILER=clang++ -DCLUTTERSCOPE_FUZZ=ON \
+    "${CLUTTERSCOPE_LAUNCHER[@]}" >/dev/null
+}

@@ -117,8 +117,10 @@ BopRecall bop_recall(const std::vector<BopImageErrors>& images, double threshold
     const std::vector<bool> valid = bop_valid_gt(image.gt, image.targets, visib_gt_min);
     std::vector<int> matched(gt_count, -1);
     for (const auto& [obj_id, estimates] : image.estimates) {
-      const bool in_image = std::any_of(image.gt.begin(), image.gt.end(),
-                                        [&](const BopGtInstance& g) { return g.obj_id == obj_id; });
+      // Init-capture: a C++17 lambda cannot capture a structured binding (clang refuses it).
+      const bool in_image =
+          std::any_of(image.gt.begin(), image.gt.end(),
+                      [id = obj_id](const BopGtInstance& g) { return g.obj_id == id; });
       if (!in_image) continue;  // match_poses_scene matches only objects of the GT
       const std::vector<int> object_matches = bop_match(estimates, valid, threshold, gt_count);
       for (int k = 0; k < gt_count; ++k) {

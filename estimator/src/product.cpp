@@ -1,7 +1,6 @@
 #include "clutterscope/estimator/product.hpp"
 
 #include <cmath>
-#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -9,8 +8,6 @@
 
 namespace clutterscope::estimator {
 namespace {
-
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 void check_inputs(const MixtureList& inputs) {
   if (inputs.empty()) throw std::invalid_argument("product of mixtures needs at least one input");

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "cli_run.hpp"
+#include "requirements.hpp"
 
 namespace clutterscope::cli {
 namespace {
@@ -77,7 +78,7 @@ class BenchCalibrationCliGl : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string why;
-    if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
     dir_ = fs::temp_directory_path() /
            ("clutterscope-bench-calibration-test-" + std::to_string(::getpid()));
     fs::remove_all(dir_);

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "cli_run.hpp"
+#include "requirements.hpp"
 
 namespace clutterscope::cli {
 namespace {
@@ -20,7 +21,7 @@ bool software_renderer() { return render::EglContext::create().is_software(); }
 
 TEST(BenchCliGl, VisibilityPrintsTheRatiosAndBothThroughputs) {
   std::string why;
-  if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+  if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
   const clutterscope::testing::CommandRun run = clutterscope::testing::run_merged(
       "bench visibility --images 4 --objects 3 --triangles 200 --width 160 --height 120 --jobs 2");
   ASSERT_EQ(run.exit_code, 0) << run.output;
@@ -36,7 +37,7 @@ TEST(BenchCliGl, VisibilityPrintsTheRatiosAndBothThroughputs) {
 
 TEST(BenchCliGl, DenseVisibilityIsExactAgainstBopToolkitsMethodAndRunsTheCommand) {
   std::string why;
-  if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+  if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
   const clutterscope::testing::CommandRun run = clutterscope::testing::run_merged(
       "bench visibility --dense --images 3 --models 3 --objects 3 --triangles-min 2000 "
       "--triangles-max 4000 --width 160 --height 120 --jobs 2 --job-images 20");
@@ -63,7 +64,7 @@ TEST(BenchCliGl, DenseVisibilityIsExactAgainstBopToolkitsMethodAndRunsTheCommand
 
 TEST(BenchCliGl, EstimatePrintsTheBreakdownAndTheTiledComparisons) {
   std::string why;
-  if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+  if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
   const fs::path tray10 = fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray10";
   const clutterscope::testing::CommandRun run = clutterscope::testing::run_merged(
       "bench estimate " + clutterscope::testing::quoted(tray10) +

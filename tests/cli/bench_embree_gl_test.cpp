@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "bench_embree.hpp"
+#include "requirements.hpp"
 
 namespace clutterscope::cli {
 namespace {
@@ -94,7 +95,7 @@ class EmbreeReferenceGl : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string why;
-    if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
     context_.emplace(render::EglContext::create());
     renderer_ = std::make_unique<render::BopDepthRenderer>(*context_);
   }

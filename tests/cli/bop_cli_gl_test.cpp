@@ -11,6 +11,7 @@
 
 #include "bop_fixture_support.hpp"
 #include "cli_run.hpp"
+#include "requirements.hpp"
 
 namespace clutterscope::datasets {
 namespace {
@@ -132,7 +133,7 @@ class BopCliBadInput : public ::testing::TestWithParam<size_t> {
  protected:
   void SetUp() override {
     std::string why;
-    if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
     ASSERT_TRUE(fs::exists(CLUTTERSCOPE_BINARY)) << "build the clutterscope target first";
   }
 };

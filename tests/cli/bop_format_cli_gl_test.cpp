@@ -10,6 +10,7 @@
 
 #include "bop_fixture_support.hpp"
 #include "cli_run.hpp"
+#include "requirements.hpp"
 
 namespace clutterscope::datasets {
 namespace {
@@ -56,7 +57,7 @@ class BopFormatCli : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string why;
-    if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
     ASSERT_TRUE(fs::exists(CLUTTERSCOPE_BINARY)) << "build the clutterscope target first";
   }
   // A copy of the bop_toolkit reference dataset (models/ and test/).

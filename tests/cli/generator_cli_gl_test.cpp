@@ -23,6 +23,7 @@
 #include <string>
 
 #include "cli_run.hpp"
+#include "requirements.hpp"
 
 namespace clutterscope::datasets {
 namespace {
@@ -112,7 +113,7 @@ class GeneratorCli : public ::testing::Test {
   }
   void SetUp() override {
     std::string why;
-    if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
     ASSERT_TRUE(fs::exists(CLUTTERSCOPE_BINARY)) << "build the clutterscope target first";
     ASSERT_EQ(generate_output_->exit_code, 0) << generate_output_->output;
   }

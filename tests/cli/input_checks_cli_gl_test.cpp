@@ -15,6 +15,7 @@
 
 #include "bop_fixture_support.hpp"
 #include "cli_run.hpp"
+#include "requirements.hpp"
 
 namespace clutterscope::cli {
 namespace {
@@ -64,7 +65,7 @@ class InputChecksCli : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string why;
-    if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
     ASSERT_TRUE(fs::exists(CLUTTERSCOPE_BINARY)) << "build the clutterscope target first";
   }
   fs::path dataset() { return write_tiny_bop_dataset(scratch_.path() / "dataset"); }

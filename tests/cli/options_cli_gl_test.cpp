@@ -21,6 +21,7 @@
 
 #include "cli_run.hpp"
 #include "jupyter_run.hpp"
+#include "requirements.hpp"
 #include "test_folders.hpp"
 
 namespace clutterscope::cli {
@@ -108,7 +109,7 @@ class OptionsCli : public ::testing::Test {
   }
   void SetUp() override {
     std::string why;
-    if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
     ASSERT_EQ(generate_->exit_code, 0) << generate_->errors;
     ASSERT_EQ(report_->exit_code, 0) << report_->errors;
   }

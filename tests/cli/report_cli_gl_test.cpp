@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "cli_run.hpp"
+#include "requirements.hpp"
 
 namespace clutterscope::cli {
 namespace {
@@ -93,7 +94,7 @@ class ReportCli : public ::testing::Test {
   }
   void SetUp() override {
     std::string why;
-    if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
     ASSERT_TRUE(fs::exists(CLUTTERSCOPE_BINARY)) << "build the clutterscope target first";
     ASSERT_EQ(generate_->exit_code, 0) << generate_->errors;
     ASSERT_EQ(first_report_->exit_code, 0) << first_report_->errors;

@@ -16,6 +16,7 @@
 
 #include "bop_fixture_support.hpp"
 #include "cli_run.hpp"
+#include "requirements.hpp"
 
 namespace clutterscope::cli {
 namespace {
@@ -44,7 +45,7 @@ class ResumeCli : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string why;
-    if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
     ASSERT_TRUE(fs::exists(CLUTTERSCOPE_BINARY)) << "build the clutterscope target first";
     fs::copy(fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray6", data(), fs::copy_options::recursive);
   }

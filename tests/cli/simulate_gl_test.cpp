@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "cli_run.hpp"
+#include "requirements.hpp"
 #include "test_folders.hpp"
 
 namespace clutterscope::cli {
@@ -87,7 +88,7 @@ void check_outputs(const fs::path& out, const nlohmann::json& summary) {
 
 TEST(SimulateGl, Tray10PaperThresholdEmptiesTheTrayAndALooserOneIsCompared) {
   std::string why;
-  if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+  if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
   const fs::path out = testing::fresh_dir("simulate_tray10");
   std::string output;
   ASSERT_EQ(
@@ -142,7 +143,7 @@ TEST(SimulateGl, Tray10PaperThresholdEmptiesTheTrayAndALooserOneIsCompared) {
 
 TEST(SimulateGl, SceneWithoutGraphRunsOnTheInferredGraphAndSaysSo) {
   std::string why;
-  if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+  if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
   const fs::path copy = testing::fresh_dir("simulate_no_graph") / "tray10";
   fs::copy(kTray10, copy, fs::copy_options::recursive);
   fs::remove(copy / "test" / "000000" / "scene_graph.json");

@@ -9,6 +9,8 @@
 #include <limits>
 #include <optional>
 
+#include "requirements.hpp"
+
 namespace clutterscope::render {
 namespace {
 
@@ -16,7 +18,7 @@ class BopRendererGl : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string why;
-    if (!egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
     context_.emplace(EglContext::create());
     renderer_.emplace(*context_);
   }

@@ -6,6 +6,8 @@
 #include <optional>
 #include <string>
 
+#include "requirements.hpp"
+
 namespace clutterscope::render {
 namespace {
 
@@ -13,7 +15,7 @@ class ContextGl : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string why;
-    if (!egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
   }
 };
 
@@ -89,7 +91,8 @@ TEST_F(ContextGl, EglDeviceVariableSelectsTheDeviceAndIsValidated) {
   try {
     device0.emplace(EglContext::create(EglOptions{0}));
   } catch (const RenderError& error) {
-    GTEST_SKIP() << "no EGL device 0 (surfaceless platform only): " << error.what();
+    CLUTTERSCOPE_SKIP_OR_FAIL("EGL")
+        << "no EGL device 0 (surfaceless platform only): " << error.what();
   }
   ASSERT_EQ(device0->display_description(), "EGL device 0");
   {

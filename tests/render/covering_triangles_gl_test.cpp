@@ -8,6 +8,8 @@
 #include <optional>
 #include <random>
 
+#include "requirements.hpp"
+
 // Leaving out the triangles that cover no pixel centre (skip_uncovered_triangles, the default)
 // must change no pixel: every render of dense meshes, many of whose triangles are smaller than
 // a pixel, is compared bit for bit with the same render of every triangle.
@@ -53,7 +55,7 @@ class CoveringTrianglesGl : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string why;
-    if (!egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
     context_.emplace(EglContext::create());
   }
   void TearDown() override { context_.reset(); }

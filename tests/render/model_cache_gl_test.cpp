@@ -14,6 +14,7 @@
 #include <string>
 
 #include "cli_run.hpp"
+#include "requirements.hpp"
 
 namespace clutterscope::render {
 namespace {
@@ -44,7 +45,7 @@ class TinyDataset : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string why;
-    if (!egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
     root_ = fs::temp_directory_path() / ("clutterscope_model_cache_" + std::to_string(::getpid()));
     fs::remove_all(root_);
     const datasets::BopWriter writer(root_);
@@ -121,7 +122,7 @@ using clutterscope::testing::CommandRun;
 using clutterscope::testing::run_merged;
 
 TEST_F(TinyDataset, RenderCommandWritesBopDepthLabelsAndPreview) {
-  if (!fs::exists(CLUTTERSCOPE_BINARY)) GTEST_SKIP() << "build the clutterscope target first";
+  ASSERT_TRUE(fs::exists(CLUTTERSCOPE_BINARY)) << "build the clutterscope target first";
   const fs::path out = root_ / "out";
   const CommandRun result =
       run_merged("render " + root_.string() + " --scene 1 --image 0 --out " + out.string());
@@ -146,7 +147,7 @@ TEST_F(TinyDataset, RenderCommandWritesBopDepthLabelsAndPreview) {
 }
 
 TEST_F(TinyDataset, RenderCommandExitCodes) {
-  if (!fs::exists(CLUTTERSCOPE_BINARY)) GTEST_SKIP() << "build the clutterscope target first";
+  ASSERT_TRUE(fs::exists(CLUTTERSCOPE_BINARY)) << "build the clutterscope target first";
   const std::string out = (root_ / "out").string();
   const CommandRun unknown_scene =
       run_merged("render " + root_.string() + " --scene 7 --image 0 --out " + out);

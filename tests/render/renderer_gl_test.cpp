@@ -11,6 +11,8 @@
 #include <random>
 #include <thread>
 
+#include "requirements.hpp"
+
 namespace clutterscope::render {
 namespace {
 
@@ -35,7 +37,8 @@ class RendererGl : public ::testing::Test {
     skip_reason_ = nullptr;
   }
   void SetUp() override {
-    if (skip_reason_ != nullptr) GTEST_SKIP() << "no EGL device: " << *skip_reason_;
+    if (skip_reason_ != nullptr)
+      CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << *skip_reason_;
   }
   static Renderer& renderer() { return *renderer_; }
 

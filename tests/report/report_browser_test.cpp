@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "report_test_tables.hpp"
+#include "requirements.hpp"
 
 // report.html in a real browser: headless Chromium (Debian `chromium`, installed by
 // scripts/install-deps.sh) loads the file from disk; the test saves a screenshot, checks that
@@ -46,8 +47,8 @@ std::vector<std::string> page_errors(const std::string& log) {
 
 TEST(ReportBrowser, ChromiumLoadsReportWithoutErrorsAndEveryPlotHasASize) {
   if (!std::filesystem::exists(kChromium)) {
-    GTEST_SKIP() << kChromium << " is missing: install Debian's chromium "
-                 << "(scripts/install-deps.sh) to run the browser test";
+    CLUTTERSCOPE_SKIP_OR_FAIL("CHROMIUM") << kChromium << " is missing: install Debian's chromium "
+                                          << "(scripts/install-deps.sh) to run the browser test";
   }
   const std::filesystem::path dir = testing::fresh_dir("browser");
   const auto rows = testing::synthetic_dataset(12);
@@ -98,7 +99,7 @@ TEST(ReportBrowser, ChromiumLoadsReportWithoutErrorsAndEveryPlotHasASize) {
   ASSERT_TRUE(std::filesystem::exists(screenshot)) << log;
   EXPECT_GT(std::filesystem::file_size(screenshot), 10000u);
   // Keep the screenshot in the build folder for people to look at.
-  const std::filesystem::path kept = std::filesystem::path(CLUTTERSCOPE_BINARY).parent_path() /
+  const std::filesystem::path kept = std::filesystem::path(CLUTTERSCOPE_BUILD_DIR) /
                                      "test_artifacts" / "report_browser_screenshot.png";
   std::filesystem::create_directories(kept.parent_path());
   std::filesystem::copy_file(screenshot, kept, std::filesystem::copy_options::overwrite_existing);

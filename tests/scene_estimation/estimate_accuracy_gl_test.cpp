@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "cli_run.hpp"
+#include "requirements.hpp"
 #include "test_folders.hpp"
 
 namespace clutterscope::scene_estimation {
@@ -66,7 +67,7 @@ void check_acceptance(const fs::path& dataset, const std::string& name, bool req
 
 TEST(EstimateAccuracyGl, TrayScenesMeetTheAcceptanceCriteria) {
   std::string why;
-  if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+  if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
   std::string output;
   const fs::path generated = testing::fresh_dir("estimate_accuracy_dataset");
   ASSERT_EQ(run_quiet("generate --out " + generated.string() +
@@ -88,7 +89,7 @@ TEST(EstimateAccuracyGl, TrayScenesMeetTheAcceptanceCriteria) {
 // binomial standard errors of 0.95 (the 306-object figure is in the README).
 TEST(EstimateAccuracyGl, XtionPresetScenesMeetTheCriteriaAndNeverDriftWhileConfident) {
   std::string why;
-  if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+  if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
   for (const std::string preset : {"tray", "pile"}) {
     std::string output;
     const fs::path generated = testing::fresh_dir("estimate_accuracy_xtion_" + preset);

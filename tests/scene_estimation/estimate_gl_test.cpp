@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "cli_run.hpp"
+#include "requirements.hpp"
 #include "test_folders.hpp"
 
 namespace clutterscope::scene_estimation {
@@ -55,7 +56,7 @@ class EstimateGl : public ::testing::Test {
   }
   void SetUp() override {
     std::string why;
-    if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
   }
   static fs::path* dataset_;
 };
@@ -501,7 +502,7 @@ TEST_F(EstimateGl, SyntheticObservationTakesASensorPreset) {
 // detection (the behaviour before amodal boxes).
 TEST(EstimateHiddenGl, CompletelyHiddenObjectsGetAnEstimateThroughTheGraph) {
   std::string why;
-  if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+  if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
   const fs::path data = fresh_dir("estimate_hidden_dataset");
   const CommandRun generated = run_merged(
       "generate --out " + data.string() +

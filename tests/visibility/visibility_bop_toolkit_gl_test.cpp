@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bop_fixture_support.hpp"
+#include "requirements.hpp"
 
 namespace clutterscope::visibility {
 namespace {
@@ -73,7 +74,7 @@ class VisibilityBopToolkit : public ::testing::TestWithParam<Reference> {
  protected:
   void SetUp() override {
     std::string why;
-    if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
   }
 };
 

@@ -16,6 +16,7 @@
 
 #include "bop_fixture_support.hpp"
 #include "cli_run.hpp"
+#include "requirements.hpp"
 
 namespace clutterscope::visibility {
 namespace {
@@ -65,7 +66,7 @@ class VisibilityCli : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string why;
-    if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
   }
   ScratchDir scratch_{"clutterscope_visibility_cli"};
   fs::path dataset(const TinyBopOptions& options = {}) {

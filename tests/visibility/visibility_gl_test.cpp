@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 
+#include "requirements.hpp"
 #include "visibility/raycast_support.hpp"
 
 namespace clutterscope::visibility {
@@ -21,7 +22,7 @@ class VisibilityGl : public ::testing::Test {
  protected:
   void SetUp() override {
     std::string why;
-    if (!render::egl_available(&why)) GTEST_SKIP() << "no EGL device: " << why;
+    if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
     context_.emplace(render::EglContext::create());
     renderer_ = std::make_unique<render::Renderer>(*context_);
     bop_renderer_ = std::make_unique<render::BopDepthRenderer>(*context_);
