@@ -71,7 +71,6 @@ class EvaluateWorker {
                  const std::vector<ResultsFile>& files, const datasets::TestTargets& targets,
                  const std::map<int, datasets::ModelSymmetries>& symmetries)
       : dataset_(dataset),
-        job_(job),
         files_(files),
         targets_(targets),
         symmetries_(symmetries),
@@ -216,7 +215,6 @@ class EvaluateWorker {
   }
 
   const datasets::BopDataset& dataset_;
-  const EvaluateJobOptions& job_;
   const std::vector<ResultsFile>& files_;
   const datasets::TestTargets& targets_;
   const std::map<int, datasets::ModelSymmetries>& symmetries_;
