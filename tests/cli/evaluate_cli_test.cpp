@@ -327,6 +327,19 @@ TEST_F(EvaluateCli, RefusesVsdTwoFilesOfOneNameAndMissingTargetsOrGtInfo) {
                                 ": missing: evaluate needs the bop19 visib_fract"),
             std::string::npos)
       << no_info.errors;
+
+  // With --keep-going the images of a scene without it fail (exit 1) and are listed; the
+  // recalls cover the other images only.
+  fs::copy_file(kReference / "test/000000/scene_gt_info.json",
+                bare / "test/000000/scene_gt_info.json");
+  const CommandRun keep_going = run_clutterscope(
+      "evaluate " + quoted(bare) + " --targets " + quoted(kReference / "test_targets_bop19.json") +
+      " --results " + small + " --out " + quoted(scratch() / "keep_going") + " -q --keep-going");
+  EXPECT_EQ(keep_going.exit_code, 1) << keep_going.errors;
+  const Json summary = Json::parse(read_text(scratch() / "keep_going" / "summary.json"));
+  ASSERT_EQ(summary.at("counts").at("failures").size(), 1u);
+  EXPECT_EQ(summary.at("counts").at("failures").at(0).at("scene_id"), 3);
+  EXPECT_EQ(summary.at("counts").at("images_evaluated"), 2);
 }
 
 TEST_F(EvaluateCli, MssdOnlyLeavesMspdEmpty) {
