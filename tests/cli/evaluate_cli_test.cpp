@@ -181,6 +181,17 @@ TEST_F(EvaluateCli, MssdMspdAndAverageRecallsMatchBopToolkit) {
           EXPECT_EQ(computed[i].at(field), settings[i].at(field)) << variant << type << i;
         }
         EXPECT_EQ(computed[i].at("recall").get<double>(), settings[i].at("recall").get<double>());
+        // Per object (bop_toolkit's obj_recalls): its matched share of its counted instances,
+        // which add up to the overall counts.
+        double tp = 0;
+        int targets = 0;
+        for (const auto& [obj_id, recall] : computed[i].at("obj_recalls").items()) {
+          const int count = mine.at("per_object").at(obj_id).at("targets_count").get<int>();
+          tp += recall.get<double>() * count;
+          targets += count;
+        }
+        EXPECT_NEAR(tp, computed[i].at("tp_count").get<double>(), 1e-9) << variant << type << i;
+        EXPECT_EQ(targets, computed[i].at("targets_count").get<int>()) << variant << type << i;
       }
     }
     std::cout << variant << ": " << expected.size()

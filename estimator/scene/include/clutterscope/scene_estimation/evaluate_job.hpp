@@ -14,8 +14,13 @@
 // evaluated, as in bop_toolkit.
 //
 // Outputs in OUT: errors.csv (batch::evaluate_errors_table: one row per evaluated estimate and
-// GT instance of its object), scores.json (per results file, bop_toolkit's key names),
-// summary.json and run.json.
+// GT instance of its object), scores.json, summary.json and run.json. scores.json maps each
+// results file's name (without .csv) to bop_toolkit's keys: bop19_average_recall_mssd,
+// bop19_average_recall_mspd (each computed error), bop19_average_recall (null: it is the mean
+// with AR_VSD), bop19_average_time_per_image (over every image of the whole file, -1 when a
+// time is negative); "recalls": per error the scores_th=*.json fields of each threshold
+// (threshold, recall, tp_count, targets_count, gt_count, obj_recalls); "per_object": per obj_id
+// its average recalls and targets_count.
 
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/dataset_selection.hpp>
