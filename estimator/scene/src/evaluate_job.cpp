@@ -382,6 +382,8 @@ class EvaluateSummary : public batch::SummaryBuilder {
         per_object[obj_id]["targets_count"] = object.front().targets_count;
       }
     };
+    // VSD goes here when it is available: its errors per tau (per-item "vsd"), recalls per
+    // (tau, threshold), AR_VSD their mean, and bop19_average_recall = bop_mean of the three.
     if (mssd_) add_type("mssd", file.mssd, estimator::bop19_fraction_thresholds());
     if (mspd_) add_type("mspd", file.mspd, estimator::bop19_mspd_thresholds_px());
     scores["recalls"] = recalls;
