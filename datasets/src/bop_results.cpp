@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <charconv>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/bop_results.hpp>
@@ -188,6 +189,34 @@ std::vector<PoseEstimate> parse_bop_results(std::string_view text,
 
 std::vector<PoseEstimate> read_bop_results(const std::filesystem::path& path) {
   return parse_bop_results(read_file(path), path);
+}
+
+void check_bop_results_in_dataset(const std::vector<PoseEstimate>& estimates,
+                                  const std::filesystem::path& path,
+                                  const std::vector<int>& obj_ids,
+                                  const std::vector<ImageKey>& images) {
+  std::map<int, std::vector<int>> scenes;  // scene_id -> sorted im_ids
+  for (const ImageKey& key : images) scenes[key.scene_id].push_back(key.im_id);
+  for (auto& entry : scenes) std::sort(entry.second.begin(), entry.second.end());
+  const std::string split = images.empty() ? std::string("the split") : "split " + images[0].split;
+  for (const PoseEstimate& estimate : estimates) {
+    const std::string line = "line " + std::to_string(estimate.line);
+    if (!std::binary_search(obj_ids.begin(), obj_ids.end(), estimate.obj_id)) {
+      throw DatasetError(path, line + ", field obj_id: " + std::to_string(estimate.obj_id) +
+                                   " is not an object of the dataset's models_info.json");
+    }
+    const auto scene = scenes.find(estimate.scene_id);
+    if (scene == scenes.end()) {
+      throw DatasetError(path, line + ", field scene_id: scene " +
+                                   std::to_string(estimate.scene_id) + " is not in " + split +
+                                   " of the dataset");
+    }
+    if (!std::binary_search(scene->second.begin(), scene->second.end(), estimate.im_id)) {
+      throw DatasetError(path, line + ", field im_id: image " + std::to_string(estimate.im_id) +
+                                   " is not in scene " + std::to_string(estimate.scene_id) +
+                                   " of " + split + " of the dataset");
+    }
+  }
 }
 
 double bop19_average_time_per_image(const std::vector<PoseEstimate>& estimates) {

@@ -158,7 +158,7 @@ TEST(ExitCodes, EachHelpStatesItsCommandsOwnExitCodes) {
             std::string::npos)
       << sensor_fit;
   EXPECT_EQ(sensor_fit.find("--keep-going (listed"), std::string::npos) << sensor_fit;
-  for (const char* command : {"visibility", "estimate", "report"}) {
+  for (const char* command : {"visibility", "estimate", "evaluate", "report"}) {
     const std::string help = run_clutterscope(std::string(command) + " --help").output;
     EXPECT_NE(help.find("Exit codes:\n  0 ok\n"
                         "  1 some images failed under --keep-going (listed in summary.json)\n" +

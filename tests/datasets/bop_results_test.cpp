@@ -177,5 +177,25 @@ TEST(BopResults, AverageTimeIsTheMeanOverImagesOrMinusOne) {
   EXPECT_EQ(bop19_average_time_per_image(parse_bop_results(unknown, kFile)), -1.0);
 }
 
+TEST(BopResults, ObjectsAndImagesMustBeTheDatasets) {
+  const std::vector<int> obj_ids = {2, 5};
+  const std::vector<ImageKey> images = {{"test", 48, 1}, {"test", 48, 7}, {"test", 50, 1}};
+  const auto check = [&](const std::string& text) {
+    return dataset_error([&] {
+      check_bop_results_in_dataset(parse_bop_results(text, kFile), kFile, obj_ids, images);
+    });
+  };
+  const std::string good = row("48,1,2", "0.5", kQuarterTurn, "1 2 3", "1") +
+                           row("48,7,5", "0.5", kQuarterTurn, "1 2 3", "1") +
+                           row("50,1,5", "0.5", kQuarterTurn, "1 2 3", "1");
+  check_bop_results_in_dataset(parse_bop_results(good, kFile), kFile, obj_ids, images);
+  expect_mentions(check(good + row("48,1,3", "0.5", kQuarterTurn, "1 2 3", "1")),
+                  {kFile.string(), "line 4, field obj_id: 3 is not an object"});
+  expect_mentions(check(good + row("49,1,2", "0.5", kQuarterTurn, "1 2 3", "1")),
+                  {kFile.string(), "line 4, field scene_id: scene 49 is not in split test"});
+  expect_mentions(check(good + row("50,7,2", "0.5", kQuarterTurn, "1 2 3", "1")),
+                  {kFile.string(), "line 4, field im_id: image 7 is not in scene 50"});
+}
+
 }  // namespace
 }  // namespace clutterscope::datasets

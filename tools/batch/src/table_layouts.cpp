@@ -93,6 +93,26 @@ const TableLayout& bop_results_table() {
   return layout;
 }
 
+const TableLayout& evaluate_errors_table() {
+  // results: the results file name without .csv; est_id: the estimate's index among the lines
+  // of its (scene, image, object) in file order (bop_toolkit's); score and visib_fract as read;
+  // gt_valid: 1 when the GT instance counts for the recalls; mssd_mm, mspd_px: empty when not
+  // computed (not in --errors, or MSSD's centres a diameter or more apart: bop_toolkit's inf).
+  static const TableLayout layout{"errors.csv",
+                                  {{"results"},
+                                   {"scene_id"},
+                                   {"im_id"},
+                                   {"obj_id"},
+                                   {"est_id"},
+                                   {"gt_id"},
+                                   {"score"},
+                                   {"visib_fract"},
+                                   {"gt_valid"},
+                                   {"mssd_mm"},
+                                   {"mspd_px"}}};
+  return layout;
+}
+
 const TableLayout& belief_samples_table() {
   static const TableLayout layout{
       "beliefs", {{"gt_id"}, {"obj_id"}, {"iteration"}, {"x_mm"}, {"y_mm"}, {"z_mm"}, {"weight"}}};

@@ -32,6 +32,7 @@ void add_commands(CLI::App& app, int* exit_code) {
   add_graph_command(app, exit_code);
   add_estimate_command(app, exit_code);
   add_bench_estimate_command(app, exit_code);
+  add_evaluate_command(app, exit_code);
   add_bench_calibration_command(app, exit_code);
   add_report_command(app, exit_code);
   add_thresholds_command(app, exit_code);
@@ -115,6 +116,7 @@ std::string own_exit_codes(const std::string& command) {
       {"", "  0 ok\n  1 as the command's --help says\n"},
       {"visibility", failed_images},
       {"estimate", failed_images},
+      {"evaluate", failed_images},
       {"report", failed_images},
       {"merge",
        "  0 ok\n  1 the merged job holds images that failed under --keep-going (listed in "

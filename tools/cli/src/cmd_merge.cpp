@@ -3,6 +3,7 @@
 #include <clutterscope/batch/output_folder.hpp>
 #include <clutterscope/report/report_job.hpp>
 #include <clutterscope/scene_estimation/estimate_job.hpp>
+#include <clutterscope/scene_estimation/evaluate_job.hpp>
 #include <clutterscope/visibility/visibility_job.hpp>
 #include <filesystem>
 #include <iostream>
@@ -41,7 +42,8 @@ void add_merge_command(CLI::App& app, int* exit_code) {
     options.inputs.assign(arguments->inputs.begin(), arguments->inputs.end());
     options.out_dir = arguments->out;
     options.outputs = {visibility::visibility_output_spec(),
-                       scene_estimation::estimate_output_spec()};
+                       scene_estimation::estimate_output_spec(),
+                       scene_estimation::evaluate_output_spec()};
     options.quiet = arguments->quiet;
     const bool reports = std::any_of(options.inputs.begin(), options.inputs.end(),
                                      [](const std::filesystem::path& input) {

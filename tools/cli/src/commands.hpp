@@ -46,6 +46,7 @@ void add_detect_command(CLI::App& app, int* exit_code);
 void add_graph_command(CLI::App& app, int* exit_code);
 void add_estimate_command(CLI::App& app, int* exit_code);
 void add_bench_estimate_command(CLI::App& app, int* exit_code);
+void add_evaluate_command(CLI::App& app, int* exit_code);
 void add_bench_calibration_command(CLI::App& app, int* exit_code);
 void add_report_command(CLI::App& app, int* exit_code);
 void add_thresholds_command(CLI::App& app, int* exit_code);

@@ -7,6 +7,7 @@
 // the column count; this one validates every field first and names the file, line and field.
 
 #include <Eigen/Geometry>
+#include <clutterscope/datasets/scene.hpp>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -51,6 +52,15 @@ std::vector<PoseEstimate> parse_bop_results(std::string_view text,
                                             const std::filesystem::path& path);
 // Reads and parses `path`; DatasetError when it is missing or unreadable.
 std::vector<PoseEstimate> read_bop_results(const std::filesystem::path& path);
+
+// The checks that need the dataset, on estimates parse_bop_results read from `path`: every
+// obj_id is a model of the dataset (`obj_ids`, sorted) and every scene_id / im_id an image of
+// the evaluated split (`images`: its keys, sorted, any split name). bop_toolkit ignores such
+// lines silently; here DatasetError names the file, the first such line and its field.
+void check_bop_results_in_dataset(const std::vector<PoseEstimate>& estimates,
+                                  const std::filesystem::path& path,
+                                  const std::vector<int>& obj_ids,
+                                  const std::vector<ImageKey>& images);
 
 // eval_bop19_pose.py's bop19_average_time_per_image: the mean over images of each image's time
 // (its first estimate's), or -1 when any time is negative (times not given).
