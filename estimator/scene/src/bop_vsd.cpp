@@ -110,13 +110,12 @@ std::vector<double> bop_vsd_from_distances(const cv::Mat& dist_test, const cv::M
   }
   std::vector<double> errors(options.taus.size(), 1.0);
   if (union_count == 0) return errors;
-  std::sort(distances.begin(), distances.end());
   const std::int64_t complement_count = union_count - intersection_count;
   for (std::size_t i = 0; i < options.taus.size(); ++i) {
     // Step cost: a pixel of the intersection costs 1 where its distance is >= tau.
-    const auto below =
-        std::lower_bound(distances.begin(), distances.end(), options.taus[i]) - distances.begin();
-    const std::int64_t costs = static_cast<std::int64_t>(distances.size()) - below;
+    const double tau = options.taus[i];
+    std::int64_t costs = 0;
+    for (const double distance : distances) costs += distance >= tau ? 1 : 0;
     errors[i] = static_cast<double>(costs + complement_count) / static_cast<double>(union_count);
   }
   return errors;
