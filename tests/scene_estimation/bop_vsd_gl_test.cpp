@@ -24,6 +24,7 @@
 #include <clutterscope/scene_estimation/bop_vsd.hpp>
 #include <clutterscope/visibility/bop_visibility.hpp>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -37,7 +38,7 @@
 #include <tuple>
 #include <vector>
 
-#include "bop_fixture_support.hpp"
+#include "bop_eval_reference_support.hpp"
 #include "requirements.hpp"
 
 namespace clutterscope::scene_estimation {
@@ -198,41 +199,18 @@ TEST_F(BopVsdGl, RendersEachPoseOnceAndRefusesBadInput) {
 
 // --- bop_toolkit's values on the sample ---------------------------------------------------------
 
-const fs::path kReference =
-    fs::path(CLUTTERSCOPE_SOURCE_DIR) / "tests/scene_estimation/data/bop_eval_reference/sample_a";
-const fs::path kSample = fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "ycbv_real";
-
-// (scene, image, object, est_id, gt_id): a row of per_estimate_errors.csv.
-using ErrorKey = std::tuple<int, int, int, int, int>;
-
-std::vector<std::string> split_csv(const std::string& line) {
-  std::vector<std::string> fields;
-  std::stringstream cells(line);
-  for (std::string cell; std::getline(cells, cell, ',');) fields.push_back(cell);
-  return fields;
-}
+const fs::path& kReference = testing::kBopEvalReference;
+using ErrorKey = testing::BopErrorKey;
 
 // The vsd_tau=... columns of per_estimate_errors.csv, in tau order.
 std::map<ErrorKey, std::vector<double>> read_expected_vsd(const fs::path& path) {
-  std::ifstream stream(path);
-  std::string line;
-  std::getline(stream, line);
-  const std::vector<std::string> header = split_csv(line);
-  std::vector<std::size_t> columns;
-  for (std::size_t i = 0; i < header.size(); ++i) {
-    if (header[i].rfind("vsd_tau=", 0) == 0) columns.push_back(i);
+  std::vector<std::string> columns;
+  for (int i = 1; i <= 10; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "vsd_tau=%.3f", 0.05 * i);
+    columns.push_back(name);
   }
-  EXPECT_EQ(columns.size(), 10u) << path;
-  std::map<ErrorKey, std::vector<double>> rows;
-  while (std::getline(stream, line)) {
-    const std::vector<std::string> fields = split_csv(line);
-    if (fields.size() != header.size()) continue;
-    std::vector<double>& values =
-        rows[{std::stoi(fields[0]), std::stoi(fields[1]), std::stoi(fields[2]),
-              std::stoi(fields[3]), std::stoi(fields[4])}];
-    for (const std::size_t column : columns) values.push_back(std::stod(fields[column]));
-  }
-  return rows;
+  return testing::read_reference_errors(path, columns);
 }
 
 // near_threshold.csv's VSD rows: the (tau index, theta) settings a renderer may flip.
@@ -243,7 +221,7 @@ std::set<std::pair<int, double>> near_vsd_settings(const fs::path& path) {
   std::string line;
   std::getline(stream, line);  // header
   while (std::getline(stream, line)) {
-    const std::vector<std::string> fields = split_csv(line);
+    const std::vector<std::string> fields = testing::split_csv_line(line);
     if (fields.size() < 7 || fields[5].rfind("vsd_tau=", 0) != 0) continue;
     const double tau = std::stod(fields[5].substr(8));
     for (std::size_t i = 0; i < taus.size(); ++i) {
@@ -258,16 +236,10 @@ constexpr int kTimingRepeats = 3;
 
 class BopVsdReference : public ::testing::TestWithParam<std::string> {
  protected:
-  static void SetUpTestSuite() {
-    dataset_dir_ = new testing::ScratchDir("bop_vsd_reference");
-    fs::copy(kSample, dataset_dir_->path(), fs::copy_options::recursive);
-    fs::copy_file(kReference / "models/models_info.json",
-                  dataset_dir_->path() / "models/models_info.json",
-                  fs::copy_options::overwrite_existing);
-  }
+  static void SetUpTestSuite() { dataset_ = new testing::BopEvalReferenceDataset(); }
   static void TearDownTestSuite() {
-    delete dataset_dir_;
-    dataset_dir_ = nullptr;
+    delete dataset_;
+    dataset_ = nullptr;
   }
   void SetUp() override {
     std::string why;
@@ -280,24 +252,21 @@ class BopVsdReference : public ::testing::TestWithParam<std::string> {
     renderer_.reset();
     context_.reset();
   }
-  static testing::ScratchDir* dataset_dir_;
+  static testing::BopEvalReferenceDataset* dataset_;
   std::optional<render::EglContext> context_;
   std::optional<render::BopDepthRenderer> renderer_;
   std::map<int, std::unique_ptr<render::BopModel>> models_;
 };
-testing::ScratchDir* BopVsdReference::dataset_dir_ = nullptr;
+testing::BopEvalReferenceDataset* BopVsdReference::dataset_ = nullptr;
 
 TEST_P(BopVsdReference, VsdAndArVsdMatchBopToolkit) {
   const std::string variant = GetParam();
-  const datasets::BopDataset dataset = datasets::BopDataset::open(dataset_dir_->path());
+  const datasets::BopDataset dataset = datasets::BopDataset::open(dataset_->path());
   const datasets::TestTargets targets =
       datasets::read_test_targets(kReference / "test_targets_bop19.json");
   const std::vector<datasets::PoseEstimate> estimates =
       datasets::read_bop_results(kReference / "results" / (variant + ".csv"));
-  std::map<std::tuple<int, int, int>, std::vector<const datasets::PoseEstimate*>> grouped;
-  for (const auto& estimate : estimates) {
-    grouped[{estimate.scene_id, estimate.im_id, estimate.obj_id}].push_back(&estimate);
-  }
+  const testing::GroupedEstimates grouped = testing::group_estimates(estimates);
   const std::vector<double> taus = estimator::bop19_fraction_thresholds();
   // The sample is YCB-V: eval_bop19_pose.py's delta for ycbv.
   BopVsdOptions window_options;
