@@ -73,7 +73,9 @@ struct BopPose {
 // The renderer and the models (render::BopModel, uploaded in the file's units) belong to the
 // worker's context, which must be current, and must outlive the object. GT renders are kept
 // for the image's life, the last estimate's until another estimate comes: calling the pairs
-// estimate by estimate renders each pose once.
+// estimate by estimate renders each pose once. Give VSD a BopDepthRenderer of its own: it draws
+// on an image-sized target, and a renderer that alternates with visibility's 3W x 3H canvas
+// reallocates its framebuffer at every switch.
 class BopVsdImage {
  public:
   // depth_mm: the measured depth as bop_toolkit loads it (visibility::load_bop_depth_mm:
