@@ -123,7 +123,7 @@ std::vector<double> bop_vsd_from_distances(const cv::Mat& dist_test, const cv::M
 
 BopVsdImage::BopVsdImage(render::BopDepthRenderer& renderer, const cv::Mat& depth_mm,
                          const Eigen::Matrix3d& K, const BopVsdOptions& options)
-    : renderer_(&renderer), options_(options) {
+    : renderer_(&renderer), options_(options), depth_mm_(depth_mm) {
   check_options(options_);
   if (depth_mm.empty() || depth_mm.type() != CV_32F) {
     throw std::invalid_argument("VSD: the measured depth must be a non-empty CV_32F image (mm)");
@@ -134,7 +134,6 @@ BopVsdImage::BopVsdImage(render::BopDepthRenderer& renderer, const cv::Mat& dept
   // eval_calc_errors.py renders on an image-sized target with the image's fx, fy, cx, cy.
   target_ = {K(0, 0), K(1, 1), K(0, 2), K(1, 2), depth_mm.cols, depth_mm.rows};
   camera_ = {K(0, 0), K(1, 1), K(0, 2), K(1, 2)};
-  test_distance_ = visibility::depth_to_distance(depth_mm, camera_);
 }
 
 BopVsdImage::View BopVsdImage::render_view(const render::BopModel& model, const BopPose& pose) {
@@ -178,8 +177,10 @@ std::vector<double> BopVsdImage::vsd(const render::BopModel& model, double diame
   // Outside both windows neither pose renders: no pixel of either visibility mask.
   const cv::Rect window = estimate_view_->window | gt_view->window;
   if (window.empty()) return std::vector<double>(options_.taus.size(), 1.0);
+  // The measured distances of this window only: depth_to_distance takes each pixel's image
+  // coordinates, so they equal the whole image's there.
   return bop_vsd_from_distances(
-      test_distance_(window),
+      visibility::depth_to_distance(depth_mm_(window), camera_, window.tl()),
       distances_in(estimate_view_->distance, estimate_view_->window, window),
       distances_in(gt_view->distance, gt_view->window, window), diameter, options_);
 }

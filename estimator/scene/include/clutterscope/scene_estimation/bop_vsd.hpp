@@ -79,7 +79,8 @@ struct BopPose {
 class BopVsdImage {
  public:
   // depth_mm: the measured depth as bop_toolkit loads it (visibility::load_bop_depth_mm:
-  // CV_32F, mm, 0 = no measurement), the image size; K: the image's cam_K. Throws
+  // CV_32F, mm, 0 = no measurement), the image size, shared (not copied: leave its pixels
+  // alone while the object lives); K: the image's cam_K. Throws
   // std::invalid_argument for invalid options, an empty or non-CV_32F depth, or a K whose
   // focal lengths are not positive.
   BopVsdImage(render::BopDepthRenderer& renderer, const cv::Mat& depth_mm, const Eigen::Matrix3d& K,
@@ -110,7 +111,7 @@ class BopVsdImage {
   BopVsdOptions options_;
   render::BopTarget target_;
   visibility::BopCamera camera_;
-  cv::Mat test_distance_;  // of the whole measured depth, computed once
+  cv::Mat depth_mm_;  // shares the caller's pixels
   std::vector<View> gt_views_;
   std::optional<View> estimate_view_;
   int renders_ = 0;
