@@ -172,15 +172,23 @@ TEST_F(BopVsdGl, WindowsGiveTheValuesOfWholeImages) {
   BopVsdImage windows(*renderer_, measured, kK);
   BopVsdImage whole(*renderer_, measured, kK, whole_options);
   const BopPose gt = box_pose({0, 0, 500});
-  // Estimates overlapping the GT, one partly outside the image.
-  for (const Eigen::Vector3d& t : {Eigen::Vector3d(8, -5, 505), Eigen::Vector3d(-30, 10, 520),
-                                   Eigen::Vector3d(0, 0, 490), Eigen::Vector3d(-250, 0, 600)}) {
+  // Estimates overlapping the GT, one partly outside the image, one wholly outside it (its
+  // window is empty: VSD 1, every GT-visible pixel in the union only).
+  int between = 0;
+  for (const Eigen::Vector3d& t :
+       {Eigen::Vector3d(8, -5, 505), Eigen::Vector3d(-30, 10, 520), Eigen::Vector3d(0, 0, 490),
+        Eigen::Vector3d(-250, 0, 600), Eigen::Vector3d(-600, 0, 600)}) {
     BopPose estimate = box_pose(t);
     estimate.R = Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY()) * estimate.R;
     const double diameter = t.x() < -200 ? 1000.0 : kBoxDiameter;  // no sphere shortcut
-    EXPECT_EQ(windows.vsd(model, diameter, estimate, gt), whole.vsd(model, diameter, estimate, gt))
-        << t.transpose();
+    const std::vector<double> errors = windows.vsd(model, diameter, estimate, gt);
+    EXPECT_EQ(errors, whole.vsd(model, diameter, estimate, gt)) << t.transpose();
+    for (const double error : errors) between += error > 0 && error < 1 ? 1 : 0;
+    if (t.x() < -500) {
+      for (const double error : errors) EXPECT_EQ(error, 1.0);
+    }
   }
+  EXPECT_GT(between, 10);  // the comparison is not between trivial values
 }
 
 TEST_F(BopVsdGl, RendersEachPoseOnceAndRefusesBadInput) {
