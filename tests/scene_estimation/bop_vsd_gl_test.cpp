@@ -102,6 +102,24 @@ TEST_F(BopVsdGl, DisjointProjectionsGiveOneWithoutRendering) {
   EXPECT_EQ(image.skipped_pairs(), 1);
 }
 
+TEST_F(BopVsdGl, WindowsThatDoNotMeetGiveOneWithoutRendering) {
+  const render::BopModel model = box_model();
+  const cv::Mat no_measurement(120, 160, CV_32F, cv::Scalar(0));
+  BopVsdOptions whole_options;
+  whole_options.render_windows = false;
+  BopVsdImage windows(*renderer_, no_measurement, kK);
+  BopVsdImage whole(*renderer_, no_measurement, kK, whole_options);
+  // A 1 m "diameter" keeps the sphere shortcut out; the estimate projects left of the image,
+  // the GT into it.
+  const BopPose estimate = box_pose({-600, 0, 600}), gt = box_pose({0, 0, 500});
+  for (BopVsdImage* image : {&windows, &whole}) {
+    for (const double error : image->vsd(model, 1000.0, estimate, gt)) EXPECT_EQ(error, 1.0);
+  }
+  EXPECT_EQ(windows.renders(), 0);
+  EXPECT_EQ(windows.skipped_pairs(), 1);
+  EXPECT_EQ(whole.renders(), 2);
+}
+
 TEST_F(BopVsdGl, PosesHiddenBehindTheSceneGiveOne) {
   const render::BopModel model = box_model();
   const cv::Mat wall(120, 160, CV_32F, cv::Scalar(300));  // 200 mm in front of the box

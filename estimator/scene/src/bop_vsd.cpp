@@ -136,18 +136,17 @@ BopVsdImage::BopVsdImage(render::BopDepthRenderer& renderer, const cv::Mat& dept
   camera_ = {K(0, 0), K(1, 1), K(0, 2), K(1, 2)};
 }
 
+cv::Rect BopVsdImage::window_of(const render::BopModel& model, const BopPose& pose) const {
+  const cv::Rect image(0, 0, target_.width, target_.height);
+  if (!options_.render_windows) return image;
+  return render::BopDepthRenderer::projected_rect(model, pose.R, pose.t, target_) & image;
+}
+
 BopVsdImage::View BopVsdImage::render_view(const render::BopModel& model, const BopPose& pose) {
-  if (!pose.R.allFinite() || !pose.t.allFinite()) {
-    throw std::invalid_argument("VSD: a pose has a non-finite value");
-  }
   View view;
   view.model = &model;
   view.pose = pose;
-  const cv::Rect image(0, 0, target_.width, target_.height);
-  view.window = options_.render_windows
-                    ? render::BopDepthRenderer::projected_rect(model, pose.R, pose.t, target_)
-                    : image;
-  view.window &= image;
+  view.window = window_of(model, pose);
   ++renders_;
   if (view.window.empty()) return view;
   const cv::Mat depth = renderer_->render_object(model, pose.R, pose.t, target_, view.window);
@@ -158,25 +157,37 @@ BopVsdImage::View BopVsdImage::render_view(const render::BopModel& model, const 
 std::vector<double> BopVsdImage::vsd(const render::BopModel& model, double diameter,
                                      const BopPose& estimate, const BopPose& gt) {
   check_diameter(diameter);
+  for (const BopPose* pose : {&estimate, &gt}) {
+    if (!pose->R.allFinite() || !pose->t.allFinite()) {
+      throw std::invalid_argument("VSD: a pose has a non-finite value");
+    }
+  }
+  const std::vector<double> all_ones(options_.taus.size(), 1.0);
   if (!bop_sphere_projections_overlap(0.5 * diameter, estimate.t, gt.t)) {
     ++skipped_pairs_;
-    return std::vector<double>(options_.taus.size(), 1.0);
+    return all_ones;
   }
-  if (!estimate_view_ || estimate_view_->model != &model ||
-      !same_pose(estimate_view_->pose, estimate)) {
-    estimate_view_ = render_view(model, estimate);
-  }
+  const bool estimate_rendered = estimate_view_ && estimate_view_->model == &model &&
+                                 same_pose(estimate_view_->pose, estimate);
   const View* gt_view = nullptr;
   for (const View& view : gt_views_) {
     if (view.model == &model && same_pose(view.pose, gt)) gt_view = &view;
   }
+  // Each pose renders inside its window: windows that do not meet share no pixel, so every
+  // pixel of the union is in one mask only and VSD is 1 (also for an empty union).
+  const cv::Rect estimate_window =
+      estimate_rendered ? estimate_view_->window : window_of(model, estimate);
+  const cv::Rect gt_window = gt_view ? gt_view->window : window_of(model, gt);
+  if ((estimate_window & gt_window).empty()) {
+    ++skipped_pairs_;
+    return all_ones;
+  }
+  if (!estimate_rendered) estimate_view_ = render_view(model, estimate);
   if (gt_view == nullptr) {
     gt_views_.push_back(render_view(model, gt));
     gt_view = &gt_views_.back();
   }
-  // Outside both windows neither pose renders: no pixel of either visibility mask.
   const cv::Rect window = estimate_view_->window | gt_view->window;
-  if (window.empty()) return std::vector<double>(options_.taus.size(), 1.0);
   // The measured distances of this window only: depth_to_distance takes each pixel's image
   // coordinates, so they equal the whole image's there.
   return bop_vsd_from_distances(

@@ -16,7 +16,8 @@
 // Speed: each pose is rendered once, on the window of the image its bounding box projects to
 // (scissored), not on the whole image; a pixel outside both windows is in neither visibility
 // mask, so the counts are those of the whole image (BopVsdOptions::render_windows = false
-// renders whole images, for checking that).
+// renders whole images, for checking that). A pair whose windows do not meet is 1 without
+// rendering, exactly: no pixel can be in both masks.
 
 #include <Eigen/Core>
 #include <clutterscope/estimator/bop_scores.hpp>
@@ -92,7 +93,8 @@ class BopVsdImage {
   std::vector<double> vsd(const render::BopModel& model, double diameter, const BopPose& estimate,
                           const BopPose& gt);
 
-  // Poses rendered so far (GT and estimates), and pairs skipped by the sphere shortcut.
+  // Poses rendered so far (GT and estimates), and pairs given 1 without rendering: by
+  // eval_calc_errors.py's sphere shortcut, or because their windows do not meet.
   int renders() const { return renders_; }
   int skipped_pairs() const { return skipped_pairs_; }
 
@@ -105,6 +107,8 @@ class BopVsdImage {
     cv::Rect window;
     cv::Mat distance;
   };
+  // Where a pose renders: its projected window (render_windows) or the whole image.
+  cv::Rect window_of(const render::BopModel& model, const BopPose& pose) const;
   View render_view(const render::BopModel& model, const BopPose& pose);
 
   render::BopDepthRenderer* renderer_;
