@@ -20,16 +20,14 @@
 #include <clutterscope/estimator/bop_scores.hpp>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <tuple>
 #include <vector>
 
-#include "bop_fixture_support.hpp"
+#include "bop_eval_reference_support.hpp"
 
 namespace clutterscope {
 namespace {
@@ -37,32 +35,20 @@ namespace {
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
 
-const fs::path kReference =
-    fs::path(CLUTTERSCOPE_SOURCE_DIR) / "tests/scene_estimation/data/bop_eval_reference/sample_a";
-const fs::path kSample = fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "ycbv_real";
+const fs::path& kReference = testing::kBopEvalReference;
 
 Json read_json(const fs::path& path) { return Json::parse(testing::read_text(path)); }
 
-// (scene, image, object, est_id, gt_id): a row of per_estimate_errors.csv.
-using ErrorKey = std::tuple<int, int, int, int, int>;
+using ErrorKey = testing::BopErrorKey;
 struct ErrorPair {
   double mssd_mm = 0;
   double mspd_px = 0;
 };
 
 std::map<ErrorKey, ErrorPair> read_expected_errors(const fs::path& path) {
-  std::ifstream stream(path);
-  std::string line;
-  std::getline(stream, line);  // header: scene_id,im_id,obj_id,est_id,gt_id,score,...,mssd,mspd
   std::map<ErrorKey, ErrorPair> rows;
-  while (std::getline(stream, line)) {
-    std::vector<std::string> fields;
-    std::stringstream cells(line);
-    for (std::string cell; std::getline(cells, cell, ',');) fields.push_back(cell);
-    if (fields.size() < 9) continue;
-    const ErrorKey key{std::stoi(fields[0]), std::stoi(fields[1]), std::stoi(fields[2]),
-                       std::stoi(fields[3]), std::stoi(fields[4])};
-    rows[key] = {std::stod(fields[7]), std::stod(fields[8])};  // "inf" reads as infinity
+  for (const auto& [key, values] : testing::read_reference_errors(path, {"mssd", "mspd"})) {
+    rows[key] = {values.at(0), values.at(1)};
   }
   return rows;
 }
@@ -75,20 +61,14 @@ double relative_deviation(double ours, double theirs) {
 // The sample with the reference's models_info.json (test symmetries added) laid over it.
 class BopEvalReference : public ::testing::TestWithParam<std::string> {
  protected:
-  static void SetUpTestSuite() {
-    dataset_dir_ = new testing::ScratchDir("bop_eval_reference");
-    fs::copy(kSample, dataset_dir_->path(), fs::copy_options::recursive);
-    fs::copy_file(kReference / "models/models_info.json",
-                  dataset_dir_->path() / "models/models_info.json",
-                  fs::copy_options::overwrite_existing);
-  }
+  static void SetUpTestSuite() { dataset_ = new testing::BopEvalReferenceDataset(); }
   static void TearDownTestSuite() {
-    delete dataset_dir_;
-    dataset_dir_ = nullptr;
+    delete dataset_;
+    dataset_ = nullptr;
   }
-  static testing::ScratchDir* dataset_dir_;
+  static testing::BopEvalReferenceDataset* dataset_;
 };
-testing::ScratchDir* BopEvalReference::dataset_dir_ = nullptr;
+testing::BopEvalReferenceDataset* BopEvalReference::dataset_ = nullptr;
 
 struct ModelData {
   estimator::ModelPoints points;  // metres
@@ -110,19 +90,15 @@ ModelData model_data(const datasets::ModelInfo& info, const datasets::ModelSymme
 
 TEST_P(BopEvalReference, MssdMspdAndRecallsMatchBopToolkit) {
   const std::string variant = GetParam();
-  const datasets::BopDataset dataset = datasets::BopDataset::open(dataset_dir_->path());
+  const datasets::BopDataset dataset = datasets::BopDataset::open(dataset_->path());
   const datasets::TestTargets targets =
       datasets::read_test_targets(kReference / "test_targets_bop19.json");
   const std::vector<datasets::PoseEstimate> estimates =
       datasets::read_bop_results(kReference / "results" / (variant + ".csv"));
 
-  // Estimates of each (scene, image, object) in file order.
-  std::map<std::tuple<int, int, int>, std::vector<const datasets::PoseEstimate*>> grouped;
-  for (const auto& estimate : estimates) {
-    grouped[{estimate.scene_id, estimate.im_id, estimate.obj_id}].push_back(&estimate);
-  }
+  const testing::GroupedEstimates grouped = testing::group_estimates(estimates);
   const std::map<int, datasets::ModelSymmetries> symmetries =
-      datasets::read_model_symmetries(dataset_dir_->path() / "models/models_info.json");
+      datasets::read_model_symmetries(dataset_->path() / "models/models_info.json");
   std::map<int, ModelData> models;
 
   std::map<ErrorKey, ErrorPair> ours;
