@@ -1,14 +1,20 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/report/by_visibility.hpp>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "report_test_tables.hpp"
+#include "test_folders.hpp"
 
 namespace clutterscope::report {
 namespace {
@@ -451,6 +457,35 @@ TEST(ByVisibility, MethodsSideBySideAreKeyedByMethodAndIndependent) {
   const nlohmann::ordered_json json = by_visibility_json(both);
   EXPECT_EQ(json["methods"][1]["method"], "informative");
   EXPECT_EQ(json["options"]["correct_metric"], "mssd");
+}
+
+TEST(ByVisibility, JsonFollowsItsSchema) {
+  // Generated methods with every metric, a method without estimates (score_all null) and
+  // undefined statistics (empty bands).
+  std::mt19937_64 rng(5);
+  MethodTargets full = degrading_method(rng, 100);
+  for (TargetOutcome& t : full.targets) {
+    t.estimate->mspd = 100.0 * *t.estimate->mssd;
+    t.estimate->vsd.assign(10, std::min(1.0, *t.estimate->mssd));
+  }
+  full.targets.push_back(unmatched(0.05));
+  const MethodTargets none{"none", {unmatched(0.5), unmatched(0.6)}};
+  const std::filesystem::path dir = clutterscope::testing::fresh_dir("by_visibility_schema");
+  const std::filesystem::path json = dir / "by_visibility.json";
+  std::ofstream(json)
+      << by_visibility_json(analyse_by_visibility({full, none}, fast_options())).dump(2);
+  const std::filesystem::path schema =
+      std::filesystem::path(CLUTTERSCOPE_SOURCE_DIR) / "tools/report/by_visibility.schema.json";
+  const std::string log = (dir / "validation.txt").string();
+  EXPECT_EQ(
+      report::testing::run(
+          "python3 -c \"import json, sys, jsonschema; "
+          "schema = json.load(open(sys.argv[1])); "
+          "jsonschema.Draft202012Validator.check_schema(schema); "
+          "jsonschema.Draft202012Validator(schema).validate(json.load(open(sys.argv[2])))\" '" +
+          schema.string() + "' '" + json.string() + "' > '" + log + "' 2>&1"),
+      0)
+      << clutterscope::testing::read_file(log);
 }
 
 TEST(ByVisibility, TablesWriteHandCheckedRows) {

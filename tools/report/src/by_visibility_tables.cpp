@@ -247,6 +247,7 @@ std::string format_score_recommendation_csv(const ByVisibilityAnalysis& analysis
 nlohmann::ordered_json by_visibility_json(const ByVisibilityAnalysis& analysis) {
   const ByVisibilityOptions& options = analysis.options;
   Json json;
+  json["schema_version"] = kByVisibilitySchemaVersion;
   json["options"] = {{"visibility", to_string(options.visibility)},
                      {"band_edges", options.band_edges},
                      {"curve_step", options.curve_step},

@@ -204,9 +204,12 @@ std::string format_error_correlation_csv(const ByVisibilityAnalysis& analysis);
 std::string format_score_sweep_csv(const ByVisibilityAnalysis& analysis);
 std::string format_score_recommendation_csv(const ByVisibilityAnalysis& analysis);
 
-// The whole analysis as JSON (by_visibility.json): options, then per method its counts, bands,
-// curve, correlations and score bands; undefined values are null with their reason under
-// "undefined".
+// Version of the by_visibility.json layout (schema: tools/report/by_visibility.schema.json).
+constexpr int kByVisibilitySchemaVersion = 1;
+
+// The whole analysis as JSON (by_visibility.json): schema_version, options, then per method its
+// counts, bands, curve, correlations and score bands; undefined values are null with their
+// reason under "undefined".
 nlohmann::ordered_json by_visibility_json(const ByVisibilityAnalysis& analysis);
 
 }  // namespace clutterscope::report
