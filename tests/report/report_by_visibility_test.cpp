@@ -119,6 +119,40 @@ TEST(ByVisibility, VsdAveragesOverTausAndThresholdsAndMspdUsesPixelThresholds) {
   EXPECT_EQ(metric(result.all, PoseMetric::kMspd).thresholds.front(), 5.0);
 }
 
+TEST(ByVisibility, BopsOwnMatchDecidesTheRecallWhereGiven) {
+  // Two instances of one object, one estimate (MSSD 0.07 against the first). BOP's matching
+  // pairs the estimate with the first instance at thresholds 0.05 .. 0.15 only (say the second
+  // is nearer beyond): 3 cells, and with the second at 0.2 .. 0.5: 7 cells.
+  TargetOutcome first = target(0.8, 0.07);
+  TargetOutcome second = unmatched(0.8);
+  first.bop_recalled[PoseMetric::kMssd] = {1, 1, 1, 0, 0, 0, 0, 0, 0, 0};
+  second.bop_recalled[PoseMetric::kMssd] = {0, 0, 0, 1, 1, 1, 1, 1, 1, 1};
+  const MethodByVisibility result =
+      analyse_by_visibility({{"m", {first, second}}}, fast_options()).methods.at(0);
+  // (3 + 7) / 20, not (9 + 0) / 20 from the estimate's error alone.
+  EXPECT_DOUBLE_EQ(*result.all.metrics.at(0).average_recall.value, 0.5);
+  EXPECT_EQ(result.all.metrics.at(0).recalled, (std::vector<int>{1, 1, 1, 1, 1, 1, 1, 1, 1, 1}));
+  EXPECT_DOUBLE_EQ(*result.all.metrics.at(0).median_error.value, 0.07);  // still the estimate's
+  // The flags come for every target or none, one per cell, and for an error the method has.
+  second.bop_recalled.clear();
+  EXPECT_THROW(analyse_by_visibility({{"m", {first, second}}}, fast_options()),
+               std::invalid_argument);
+  second.bop_recalled[PoseMetric::kMssd] = {1, 0};
+  EXPECT_THROW(analyse_by_visibility({{"m", {first, second}}}, fast_options()),
+               std::invalid_argument);
+  second.bop_recalled[PoseMetric::kMssd].assign(10, false);
+  second.bop_recalled[PoseMetric::kMspd].assign(10, false);
+  first.bop_recalled[PoseMetric::kMspd].assign(10, false);
+  try {
+    analyse_by_visibility({{"m", {first, second}}}, fast_options());
+    ADD_FAILURE() << "no error";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("bop_recalled for mspd, an error no estimate"),
+              std::string::npos)
+        << error.what();
+  }
+}
+
 TEST(ByVisibility, ScoreSweepMatchesHandCountedPrecisionRecallAndRecommendation) {
   // Scores 0.9 .. 0.5, correct (MSSD < 0.1) = yes, yes, no, yes, no; one unmatched target.
   const MethodTargets method{"m",

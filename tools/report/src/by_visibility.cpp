@@ -39,6 +39,33 @@ void check_error(const std::string& at, const char* name, double value) {
   }
 }
 
+// bop_recalled: one flag per grid cell, only for metrics the estimates carry, on every target
+// or none.
+void validate_bop_recalled(const MethodTargets& method, const std::vector<PoseMetric>& metrics) {
+  if (method.targets.empty()) return;
+  const TargetOutcome& first = method.targets.front();
+  for (const TargetOutcome& target : method.targets) {
+    const std::string at = where(method.method, target);
+    for (const auto& [metric, recalled] : target.bop_recalled) {
+      if (std::find(metrics.begin(), metrics.end(), metric) == metrics.end()) {
+        throw std::invalid_argument(at + "bop_recalled for " + to_string(metric) +
+                                    ", an error no estimate of the method carries");
+      }
+      if (recalled.size() != bop19_grid_size(metric)) {
+        throw std::invalid_argument(at + "bop_recalled for " + to_string(metric) + " has " +
+                                    std::to_string(recalled.size()) + " flags, expected " +
+                                    std::to_string(bop19_grid_size(metric)));
+      }
+    }
+    for (PoseMetric metric : kMetrics) {
+      if (target.bop_recalled.count(metric) != first.bop_recalled.count(metric)) {
+        throw std::invalid_argument(at + "bop_recalled for " + to_string(metric) +
+                                    " is given for some targets only");
+      }
+    }
+  }
+}
+
 // The metrics a method's estimates carry; throws when one is present on some estimates only.
 std::vector<PoseMetric> validate_method(const MethodTargets& method) {
   const size_t taus = estimator::bop19_fraction_thresholds().size();
@@ -94,6 +121,7 @@ std::vector<PoseMetric> validate_method(const MethodTargets& method) {
       if (has_metric(*first_estimated->estimate, metric)) metrics.push_back(metric);
     }
   }
+  validate_bop_recalled(method, metrics);
   return metrics;
 }
 
@@ -124,10 +152,15 @@ MetricRecall metric_recall(const std::vector<const TargetOutcome*>& targets, Pos
   recall.recalled.assign(recall.thresholds.size(), 0);
   std::vector<double> errors;
   for (const TargetOutcome* target : targets) {
+    const auto bop = target->bop_recalled.find(metric);
+    if (bop != target->bop_recalled.end()) {
+      for (size_t k = 0; k < recall.recalled.size(); ++k) recall.recalled[k] += bop->second[k];
+    }
     if (!target->estimate) continue;
     const TargetEstimate& estimate = *target->estimate;
     ++recall.evaluated;
     errors.push_back(*estimate.error(metric));
+    if (bop != target->bop_recalled.end()) continue;  // BOP's match decided the recall
     for (size_t t = 0; t < taus.size(); ++t) {
       const double error = metric == PoseMetric::kVsd ? estimate.vsd[t] : *estimate.error(metric);
       for (size_t k = 0; k < thresholds.size(); ++k) {
@@ -348,6 +381,12 @@ const char* error_unit(PoseMetric metric) {
 std::vector<double> bop19_thresholds(PoseMetric metric) {
   return metric == PoseMetric::kMspd ? estimator::bop19_mspd_thresholds_px()
                                      : estimator::bop19_fraction_thresholds();
+}
+
+size_t bop19_grid_size(PoseMetric metric) {
+  const size_t thresholds = bop19_thresholds(metric).size();
+  return metric == PoseMetric::kVsd ? thresholds * estimator::bop19_fraction_thresholds().size()
+                                    : thresholds;
 }
 
 const char* to_string(VisibilityMeasure measure) {

@@ -14,6 +14,7 @@
 #include <clutterscope/report/statistics.hpp>
 #include <clutterscope/report/thresholds.hpp>
 #include <cstdint>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -56,8 +57,14 @@ struct TargetOutcome {
   // taken by other instances). A target is recalled at threshold theta of a metric iff its
   // estimate's error is < theta (VSD: per tau). This is BOP's count exactly when the estimate
   // matched to a target is the same at every threshold (always with one instance of the
-  // object in the image).
+  // object in the image); see bop_recalled for the general case.
   std::optional<TargetEstimate> estimate;
+  // Optional, per metric: BOP's own match at each cell of the metric's (tau, threshold) grid
+  // (MetricRecall order; estimator::bop_match run per threshold), which with several instances
+  // of an object in an image may pair the target with different estimates at different
+  // thresholds. Where given it decides the recall instead of the estimate's error, so the
+  // recall over all targets is BOP's to the last bit. Per metric all targets have it or none.
+  std::map<PoseMetric, std::vector<bool>> bop_recalled;
 };
 
 // The targets of one results file.
@@ -188,10 +195,14 @@ struct ByVisibilityAnalysis {
 // edge count as on it, so 0.3 stored as 0.29999... falls in [0.3, 0.5)).
 int band_index(const std::vector<double>& band_edges, double visibility);
 
+// The size of a metric's (tau, threshold) grid: 10 for MSSD and MSPD, 100 for VSD.
+size_t bop19_grid_size(PoseMetric metric);
+
 // Validates the options (std::invalid_argument with the reason) and the targets
 // (std::invalid_argument naming method, scene, image and gt: a visibility outside [0, 1], a
 // non-finite score or error, an error type present on some estimates only, a VSD without one
-// value per tau, duplicate method names), then runs everything.
+// value per tau, bop_recalled of the wrong size, for a metric the estimates lack or on some
+// targets only, duplicate method names), then runs everything.
 ByVisibilityAnalysis analyse_by_visibility(const std::vector<MethodTargets>& methods,
                                            const ByVisibilityOptions& options);
 
