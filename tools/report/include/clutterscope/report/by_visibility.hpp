@@ -63,7 +63,8 @@ struct TargetOutcome {
   // (MetricRecall order; estimator::bop_match run per threshold), which with several instances
   // of an object in an image may pair the target with different estimates at different
   // thresholds. Where given it decides the recall instead of the estimate's error, so the
-  // recall over all targets is BOP's to the last bit. Per metric all targets have it or none.
+  // recalled counts over all targets are BOP's tp counts. Per metric all targets have it or
+  // none.
   std::map<PoseMetric, std::vector<bool>> bop_recalled;
 };
 
