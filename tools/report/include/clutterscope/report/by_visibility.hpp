@@ -53,11 +53,16 @@ struct TargetOutcome {
   int gt_id = 0;                           // index in scene_gt.json
   double visib_fract = 0.0;                // bop19 (scene_gt_info.json or computed), in [0, 1]
   std::optional<double> scene_visibility;  // Eq. 10 V^s of the image, where known
-  // Empty: no estimate was matched to this target (none for its object in the image, or all
-  // taken by other instances). A target is recalled at threshold theta of a metric iff its
-  // estimate's error is < theta (VSD: per tau). This is BOP's count exactly when the estimate
-  // matched to a target is the same at every threshold (always with one instance of the
-  // object in the image); see bop_recalled for the general case.
+  // The estimate paired with this target whatever its errors (a wrong pose is the negative
+  // class of the score analysis, so it must be here, not dropped): with one instance of the
+  // object in the image the highest-scoring evaluated estimate of the object (eval_calc_errors'
+  // n_top choice); with several, pose_matching's greedy order with no threshold (by decreasing
+  // score each estimate takes the free instance with the lowest error). Empty: no estimate of
+  // the object in the image is left for it. A target is recalled at threshold theta of a
+  // metric iff this estimate's error is < theta (VSD: per tau): BOP's count whenever the
+  // pairing is the same at every threshold (always with one instance of the object in the
+  // image: BOP 2019's n_top = inst_count then evaluates one estimate); see bop_recalled for the
+  // general case.
   std::optional<TargetEstimate> estimate;
   // Optional, per metric: BOP's own match at each cell of the metric's (tau, threshold) grid
   // (MetricRecall order; estimator::bop_match run per threshold), which with several instances
