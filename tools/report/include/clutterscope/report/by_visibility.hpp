@@ -117,7 +117,9 @@ struct MetricRecall {
   // BOP's (tau, theta) grid: MSSD, MSPD one tau (tau = NaN, not written), VSD tau-major.
   std::vector<double> taus;
   std::vector<double> thresholds;
-  std::vector<int> recalled;  // per (tau, threshold): estimate with error < threshold
+  // Per (tau, threshold): targets whose estimate's error < threshold, or that BOP's match
+  // recalled (TargetOutcome::bop_recalled).
+  std::vector<int> recalled;
   // The mean over the grid of recalled / targets: BOP's AR of this metric restricted to the
   // targets; undefined without targets.
   Statistic average_recall;
