@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <clutterscope/batch/quantile.hpp>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -29,6 +30,14 @@ TEST(LinearQuantile, ValuesExactlyZeroGiveExactlyZero) {
   EXPECT_EQ(linear_quantile(values, 0.10), 0.0);  // position 4.7
   // position 23.5: between the 18th and 19th positive values
   EXPECT_DOUBLE_EQ(linear_quantile(values, 0.5), (18.0 / 42 + 19.0 / 42) / 2);
+}
+
+TEST(LinearQuantile, InfiniteValuesGiveNoNaN) {
+  // BOP's MSSD is +inf beyond its sphere shortcut: a median over such errors stays defined.
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(linear_quantile({0.07, inf, 0.3}, 0.5), 0.3);  // position 1: no interpolation
+  EXPECT_EQ(linear_quantile({inf, 0.3, inf}, 0.75), inf);  // between inf and inf
+  EXPECT_EQ(linear_quantile({0.3, inf}, 0.5), inf);        // between 0.3 and inf
 }
 
 TEST(LinearQuantile, NoValuesIsAnError) {

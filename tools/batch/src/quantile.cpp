@@ -19,7 +19,11 @@ double linear_quantile(std::vector<double> values, double probability) {
       above == below ? low
                      : *std::min_element(values.begin() + static_cast<std::ptrdiff_t>(below) + 1,
                                          values.end());
-  return low + (position - static_cast<double>(below)) * (high - low);
+  // Interpolate only where needed: with infinite values (an MSSD beyond its shortcut) 0 * inf
+  // and inf - inf would make the quantile NaN.
+  const double fraction = position - static_cast<double>(below);
+  if (fraction == 0.0 || high == low) return low;
+  return low + fraction * (high - low);
 }
 
 }  // namespace clutterscope::batch

@@ -163,4 +163,99 @@ const TableLayout& report_images_table() {
   return layout;
 }
 
+namespace {
+
+// The key columns every by-visibility table starts with (table_layouts.hpp).
+std::vector<TableColumn> by_visibility_columns(bool banded, std::vector<TableColumn> rest) {
+  std::vector<TableColumn> columns = {{"method"}, {"visibility"}};
+  if (banded) columns.insert(columns.end(), {{"scope"}, {"band_min"}, {"band_max"}});
+  columns.insert(columns.end(), rest.begin(), rest.end());
+  return columns;
+}
+
+}  // namespace
+
+const TableLayout& by_visibility_recall_table() {
+  static const TableLayout layout{"by_visibility_recall.csv",
+                                  by_visibility_columns(true, {{"metric"},
+                                                               {"error_unit"},
+                                                               {"targets"},
+                                                               {"estimated"},
+                                                               {"average_recall"},
+                                                               {"median_error"}})};
+  return layout;
+}
+
+const TableLayout& by_visibility_recall_thresholds_table() {
+  static const TableLayout layout{"by_visibility_recall_thresholds.csv",
+                                  by_visibility_columns(true, {{"metric"},
+                                                               {"error_unit"},
+                                                               {"tau"},
+                                                               {"threshold"},
+                                                               {"targets"},
+                                                               {"recalled"},
+                                                               {"recall"}})};
+  return layout;
+}
+
+const TableLayout& by_visibility_curve_table() {
+  static const TableLayout layout{"by_visibility_curve.csv",
+                                  by_visibility_columns(false, {{"metric"},
+                                                                {"centre"},
+                                                                {"window_min"},
+                                                                {"window_max"},
+                                                                {"targets"},
+                                                                {"estimated"},
+                                                                {"average_recall"}})};
+  return layout;
+}
+
+const TableLayout& by_visibility_correlation_table() {
+  static const TableLayout layout{"by_visibility_correlation.csv",
+                                  by_visibility_columns(false, {{"metric"},
+                                                                {"error_unit"},
+                                                                {"n"},
+                                                                {"unmatched"},
+                                                                {"excluded"},
+                                                                {"spearman"},
+                                                                {"ci_low"},
+                                                                {"ci_high"},
+                                                                {"confidence"},
+                                                                {"resamples"},
+                                                                {"resamples_defined"},
+                                                                {"undefined_reason"}})};
+  return layout;
+}
+
+const TableLayout& score_sweep_table() {
+  static const TableLayout layout{"score_sweep.csv",
+                                  by_visibility_columns(true, {{"correct_metric"},
+                                                               {"correct_threshold"},
+                                                               {"score_min"},
+                                                               {"targets"},
+                                                               {"estimated"},
+                                                               {"correct"},
+                                                               {"accepted"},
+                                                               {"accepted_correct"},
+                                                               {"precision"},
+                                                               {"recall"},
+                                                               {"f1"},
+                                                               {"target_recall"}})};
+  return layout;
+}
+
+const TableLayout& score_recommendation_table() {
+  static const TableLayout layout{"score_recommendation.csv",
+                                  by_visibility_columns(true, {{"correct_metric"},
+                                                               {"correct_threshold"},
+                                                               {"min_precision"},
+                                                               {"lowest_score_with_min_precision"},
+                                                               {"precision"},
+                                                               {"recall"},
+                                                               {"target_recall"},
+                                                               {"best_f1_score"},
+                                                               {"best_f1"}})};
+  return layout;
+}
+
 }  // namespace clutterscope::batch

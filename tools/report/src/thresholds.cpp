@@ -68,13 +68,11 @@ ThresholdRow evaluate_decision(const std::vector<ObjectRow>& objects, double thr
     row.accepted_accurate += accepted && accurate;
     row.accepted_below_cutoff += accepted && object.visib_fract < visibility_cutoff;
   }
-  row.precision = ratio(row.accepted_accurate, row.accepted, "no estimate accepted");
-  row.recall = ratio(row.accepted_accurate, row.accurate, "no accurate estimate");
-  const int false_positives = row.accepted - row.accepted_accurate;
-  const int false_negatives = row.accurate - row.accepted_accurate;
-  row.f1 = ratio(2 * row.accepted_accurate,
-                 2 * row.accepted_accurate + false_positives + false_negatives,
-                 "no estimate accepted and none accurate");
+  const DecisionQuality quality =
+      decision_quality(row.accepted, row.accurate, row.accepted_accurate);
+  row.precision = quality.precision;
+  row.recall = quality.recall;
+  row.f1 = quality.f1;
   row.accepted_below_cutoff_share =
       ratio(row.accepted_below_cutoff, row.accepted, "no estimate accepted");
   return row;
@@ -167,24 +165,46 @@ RadiusRow evaluate_radius(const std::vector<ObjectRow>& objects, double radius_c
   return row;
 }
 
-ThresholdRecommendation recommend_threshold(const std::vector<ThresholdRow>& sweep,
-                                            double min_precision) {
+DecisionQuality decision_quality(int accepted, int accurate, int accepted_accurate) {
+  DecisionQuality quality;
+  quality.precision = ratio(accepted_accurate, accepted, "no estimate accepted");
+  quality.recall = ratio(accepted_accurate, accurate, "no accurate estimate");
+  const int false_positives = accepted - accepted_accurate;
+  const int false_negatives = accurate - accepted_accurate;
+  quality.f1 =
+      ratio(2 * accepted_accurate, 2 * accepted_accurate + false_positives + false_negatives,
+            "no estimate accepted and none accurate");
+  return quality;
+}
+
+ThresholdRecommendation recommend(const std::vector<SweepPoint>& strictest_first,
+                                  double min_precision) {
   ThresholdRecommendation recommendation;
   recommendation.largest_with_min_precision = Statistic::undefined(
       "no swept threshold reaches precision " + batch::printf_general(min_precision));
   recommendation.best_f1 = Statistic::undefined("F1 is undefined at every swept threshold");
   recommendation.best_f1_value = recommendation.best_f1;
-  for (const ThresholdRow& row : sweep) {  // ascending thresholds: later wins ties
-    if (row.precision.defined() && *row.precision.value >= min_precision) {
-      recommendation.largest_with_min_precision = Statistic::of(row.threshold_cm2);
+  for (const SweepPoint& point : strictest_first) {  // later (more accepting) wins ties
+    if (point.precision.defined() && *point.precision.value >= min_precision) {
+      recommendation.largest_with_min_precision = Statistic::of(point.parameter);
     }
-    if (row.f1.defined() && (!recommendation.best_f1_value.defined() ||
-                             *row.f1.value >= *recommendation.best_f1_value.value)) {
-      recommendation.best_f1 = Statistic::of(row.threshold_cm2);
-      recommendation.best_f1_value = row.f1;
+    if (point.f1.defined() && (!recommendation.best_f1_value.defined() ||
+                               *point.f1.value >= *recommendation.best_f1_value.value)) {
+      recommendation.best_f1 = Statistic::of(point.parameter);
+      recommendation.best_f1_value = point.f1;
     }
   }
   return recommendation;
+}
+
+ThresholdRecommendation recommend_threshold(const std::vector<ThresholdRow>& sweep,
+                                            double min_precision) {
+  std::vector<SweepPoint> points;
+  points.reserve(sweep.size());
+  for (const ThresholdRow& row : sweep) {
+    points.push_back({row.threshold_cm2, row.precision, row.f1});
+  }
+  return recommend(points, min_precision);
 }
 
 std::vector<CutoffRow> accepted_by_cutoff(const std::vector<ObjectRow>& objects,

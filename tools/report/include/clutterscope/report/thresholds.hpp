@@ -95,6 +95,31 @@ struct ThresholdAnalysis {
   std::optional<RadiusRow> chosen_radius;  // with options.chosen_radius_cm
 };
 
+// Precision, recall and F1 of a decision from its counts: precision = accepted_accurate /
+// accepted, recall = accepted_accurate / accurate, F1 = 2 TP / (2 TP + FP + FN), each undefined
+// (with the reason) when its denominator is 0. Every sweep of the report counts with this.
+struct DecisionQuality {
+  Statistic precision;
+  Statistic recall;
+  Statistic f1;
+};
+DecisionQuality decision_quality(int accepted, int accurate, int accepted_accurate);
+
+// One decision of a sweep as the recommendation sees it: its parameter, precision and F1.
+struct SweepPoint {
+  double parameter = 0.0;
+  Statistic precision;
+  Statistic f1;
+};
+
+// The recommendation rule of every sweep (variance thresholds, radii, score thresholds), over
+// points ordered from the strictest decision to the most accepting one: the most accepting
+// point with precision >= min_precision (largest_with_min_precision holds its parameter), and
+// the F1 maximum (the most accepting on ties).
+ThresholdRecommendation recommend(const std::vector<SweepPoint>& strictest_first,
+                                  double min_precision);
+
+// recommend() over a variance sweep in ascending thresholds (a larger T accepts more).
 ThresholdRecommendation recommend_threshold(const std::vector<ThresholdRow>& sweep,
                                             double min_precision);
 
