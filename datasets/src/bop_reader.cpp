@@ -472,6 +472,10 @@ std::string describe_type(int type) {
 
 }  // namespace
 
+fs::path bop_depth_path(const fs::path& root, const ImageKey& key) {
+  return depth_file(root / key.split / six_digits(key.scene_id), key.im_id);
+}
+
 cv::Mat load_depth(const SceneView& view) {
   const std::string where = location(view.key.scene_id, view.key.im_id);
   if (view.depth_path.empty()) {

@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/input_digest.hpp>
+#include <clutterscope/batch/run_record.hpp>
 #include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/bop_gt_info.hpp>
@@ -8,13 +9,23 @@
 #include <clutterscope/datasets/bop_results.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/files.hpp>
+#include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/estimator/bop_pose_errors.hpp>
 #include <clutterscope/estimator/bop_scores.hpp>
+#include <clutterscope/render/bop_renderer.hpp>
+#include <clutterscope/render/context.hpp>
+#include <clutterscope/render/renderer_in_use.hpp>
+#include <clutterscope/report/by_visibility.hpp>
+#include <clutterscope/scene_estimation/bop_vsd.hpp>
 #include <clutterscope/scene_estimation/evaluate_job.hpp>
+#include <clutterscope/visibility/bop_visibility.hpp>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <utility>
@@ -54,6 +65,44 @@ bool has(const std::vector<std::string>& errors, const char* name) {
   return std::find(errors.begin(), errors.end(), name) != errors.end();
 }
 
+using report::PoseMetric;
+constexpr PoseMetric kMetrics[] = {PoseMetric::kVsd, PoseMetric::kMssd, PoseMetric::kMspd};
+
+// The computed metrics of a fingerprint's "errors", in PoseMetric order (scores.json's and
+// bop19_average_recall's order).
+std::vector<PoseMetric> metrics_of(const Json& errors) {
+  std::vector<PoseMetric> metrics;
+  for (const PoseMetric metric : kMetrics) {
+    if (std::find(errors.begin(), errors.end(), report::to_string(metric)) != errors.end()) {
+      metrics.push_back(metric);
+    }
+  }
+  return metrics;
+}
+
+// BOP 2019's thresholds of a metric as the scores use them (estimator/bop_scores.hpp).
+std::vector<double> score_thresholds(PoseMetric metric) {
+  return metric == PoseMetric::kMspd ? estimator::bop19_mspd_thresholds_px()
+                                     : estimator::bop19_fraction_thresholds();
+}
+
+// VSD's misalignment tolerances; one placeholder for MSSD and MSPD, which have none.
+std::vector<double> taus_of(PoseMetric metric) {
+  return metric == PoseMetric::kVsd ? estimator::bop19_fraction_thresholds()
+                                    : std::vector<double>{std::nan("")};
+}
+
+// Where BOP puts an image's depth image, for naming it when it is missing.
+fs::path expected_depth_path(const fs::path& root, const datasets::ImageKey& key) {
+  return root / key.split / datasets::six_digits(key.scene_id) / "depth" /
+         (datasets::six_digits(key.im_id) + ".png");
+}
+
+// A pose in the model file's millimetres, as bop_toolkit renders (the readers give metres).
+BopPose pose_mm(const Eigen::Isometry3d& model_to_camera) {
+  return {model_to_camera.linear(), model_to_camera.translation() * 1000.0};
+}
+
 // A normalised error for the per-item summary: JSON has no infinity, so a non-finite error
 // (MSSD's shortcut, an MSPD through depth 0) is null, which never matches, as inf and NaN never
 // match in bop_toolkit.
@@ -67,15 +116,24 @@ fs::path scene_gt_info_path(const datasets::BopDataset& dataset, const std::stri
 
 class EvaluateWorker {
  public:
+  // vsd: VSD's options when VSD is computed; the worker then renders on its own context.
   EvaluateWorker(const datasets::BopDataset& dataset, const EvaluateJobOptions& job,
                  const std::vector<ResultsFile>& files, const datasets::TestTargets& targets,
-                 const std::map<int, datasets::ModelSymmetries>& symmetries)
+                 const std::map<int, datasets::ModelSymmetries>& symmetries,
+                 const std::optional<BopVsdOptions>& vsd)
       : dataset_(dataset),
         files_(files),
         targets_(targets),
         symmetries_(symmetries),
         mssd_(has(job.errors, "mssd")),
-        mspd_(has(job.errors, "mspd")) {}
+        mspd_(has(job.errors, "mspd")),
+        vsd_options_(vsd) {
+    if (vsd_options_) {
+      context_.emplace(render::EglContext::create());
+      // VSD's own renderer (bop_vsd.hpp): it draws on an image-sized target.
+      renderer_.emplace(*context_);
+    }
+  }
 
   batch::ItemOutput run(const datasets::ImageKey& key) {
     const datasets::SceneView view = dataset_.load(key);
@@ -87,12 +145,27 @@ class EvaluateWorker {
     }
     const std::vector<bool> valid = estimator::bop_valid_gt(gt, targets, kBop19VisibGtMin);
 
+    // One VSD image for every results file: the GT renders are shared.
+    cv::Mat depth_mm;
+    std::optional<BopVsdImage> vsd_image;
+    if (vsd_options_) {
+      const std::string where = datasets::location(key.scene_id, key.im_id);
+      if (view.depth_path.empty()) {
+        throw datasets::DatasetError(expected_depth_path(dataset_.root(), key),
+                                     where + "missing: VSD needs the measured depth image");
+      }
+      depth_mm = visibility::load_bop_depth_mm(view.depth_path.string(), view.camera.depth_scale,
+                                               view.camera.width, view.camera.height, where);
+      vsd_image.emplace(*renderer_, depth_mm, view.camera.K, *vsd_options_);
+    }
+
     Json gt_json = Json::array(), targets_json = Json::array(), files_json = Json::array();
     for (const auto& instance : gt) gt_json.push_back({instance.obj_id, instance.visib_fract});
     for (const auto& [obj_id, inst_count] : targets) targets_json.push_back({obj_id, inst_count});
     std::string rows;
     for (const ResultsFile& file : files_) {
-      files_json.push_back(evaluate_file(file, key, view, gt, valid, targets, &rows));
+      files_json.push_back(evaluate_file(file, key, view, gt, valid, targets,
+                                         vsd_image ? &*vsd_image : nullptr, &rows));
     }
     batch::ItemOutput output;
     output.tables = {rows};
@@ -102,13 +175,13 @@ class EvaluateWorker {
 
  private:
   // The evaluated estimates of one results file in this image: errors.csv rows, and for the
-  // scores {"estimates_in_image", "evaluated": [{obj_id, est_id, score, gt_ids, mssd, mspd}]}
-  // with the errors normalised as their thresholds are.
+  // scores {"estimates_in_image", "evaluated": [{obj_id, est_id, score, gt_ids, mssd, mspd,
+  // vsd}]} with the errors normalised as their thresholds are (vsd: per GT its value per tau).
   Json evaluate_file(const ResultsFile& file, const datasets::ImageKey& key,
                      const datasets::SceneView& view,
                      const std::vector<estimator::BopGtInstance>& gt,
                      const std::vector<bool>& valid, const std::map<int, int>& targets,
-                     std::string* rows) {
+                     BopVsdImage* vsd_image, std::string* rows) {
     Json evaluated = Json::array();
     std::size_t in_image = 0;
     const auto image = file.by_image.find({key.scene_id, key.im_id});
@@ -117,6 +190,8 @@ class EvaluateWorker {
     }
     // MSPD thresholds are for 640 px wide images (eval_calc_scores.py).
     const double width_factor = 640.0 / view.camera.width;
+    // errors.csv's vsd_tau columns: BOP 2019's taus.
+    const std::size_t vsd_columns = estimator::bop19_fraction_thresholds().size();
     for (const auto& [obj_id, inst_count] : targets) {
       if (image == file.by_image.end()) break;
       const auto found = image->second.find(obj_id);
@@ -128,10 +203,12 @@ class EvaluateWorker {
       for (const int est_id : estimator::bop_top_estimates(scores, inst_count)) {
         const datasets::PoseEstimate& estimate = *estimates[est_id];
         Json gt_ids = Json::array(), mssd = Json::array(), mspd = Json::array();
+        Json vsd_values = Json::array();
         for (std::size_t k = 0; k < view.objects.size(); ++k) {
           if (view.objects[k].obj_id != obj_id) continue;
           const Eigen::Isometry3d& pose = view.objects[k].model_to_camera;
           double mssd_m = HUGE_VAL, mspd_px = HUGE_VAL;
+          std::vector<double> vsd;
           batch::CsvRow row;
           row.add(file.name).add(key.scene_id).add(key.im_id).add(obj_id).add(est_id);
           row.add(static_cast<int>(k)).add(batch::format_shortest(estimate.score));
@@ -146,10 +223,19 @@ class EvaluateWorker {
                                       model.symmetries);
             mspd.push_back(error_json(mspd_px * width_factor));
           }
+          if (vsd_image != nullptr) {
+            // VSD in the model file's millimetres, as bop_toolkit renders.
+            vsd = vsd_image->vsd(gpu_model(obj_id), model.diameter_m * 1000.0,
+                                 pose_mm(estimate.model_to_camera), pose_mm(pose));
+            vsd_values.push_back(vsd);
+          }
           // Empty: not computed (not in --errors, or MSSD's centres a diameter or more apart,
           // which bop_toolkit records as inf) or not finite (an MSPD through depth 0).
           row.add(mssd_ ? batch::format_shortest(1e3 * mssd_m) : "");
           row.add(mspd_ ? batch::format_shortest(mspd_px) : "");
+          for (std::size_t i = 0; i < vsd_columns; ++i) {
+            row.add(i < vsd.size() ? batch::format_shortest(vsd[i]) : "");
+          }
           *rows += row.str();
           gt_ids.push_back(k);
         }
@@ -158,10 +244,20 @@ class EvaluateWorker {
                              {"score", estimate.score},
                              {"gt_ids", gt_ids},
                              {"mssd", mssd},
-                             {"mspd", mspd}});
+                             {"mspd", mspd},
+                             {"vsd", vsd_values}});
       }
     }
     return {{"estimates_in_image", in_image}, {"evaluated", evaluated}};
+  }
+
+  // The model uploaded to this worker's context in its file's units (bop_toolkit renders mm).
+  const render::BopModel& gpu_model(int obj_id) {
+    const auto found = gpu_models_.find(obj_id);
+    if (found != gpu_models_.end()) return *found->second;
+    auto model = std::make_unique<render::BopModel>(
+        render::BopModel::upload(datasets::load_mesh(dataset_.model(obj_id).mesh_path, {1.0})));
+    return *gpu_models_.emplace(obj_id, std::move(model)).first->second;
   }
 
   // scene_gt_info.json's visib_fract of every GT instance (one scene kept per worker).
@@ -219,18 +315,24 @@ class EvaluateWorker {
   const datasets::TestTargets& targets_;
   const std::map<int, datasets::ModelSymmetries>& symmetries_;
   const bool mssd_, mspd_;
+  const std::optional<BopVsdOptions> vsd_options_;
   std::map<int, ModelData> models_;
+  // Destroyed before the context they live in (members go in reverse order).
+  std::optional<render::EglContext> context_;
+  std::optional<render::BopDepthRenderer> renderer_;
+  std::map<int, std::unique_ptr<render::BopModel>> gpu_models_;
   int scene_id_ = -1;
   std::string scene_split_;
   std::map<int, std::vector<double>> scene_visib_;
 };
 
-// The recalls of one error type over `images`, in scores.json's layout: per threshold
-// bop_toolkit's scores_th=*.json fields (obj_recalls: the recall of each target object).
-Json recall_entries(const std::vector<estimator::BopImageErrors>& images,
-                    const std::vector<double>& thresholds,
-                    std::map<int, std::vector<estimator::BopRecall>>* per_object,
-                    std::vector<estimator::BopRecall>* overall) {
+// The recalls of one error type (one VSD tau) over `images`, in scores.json's layout, appended
+// to `entries`: per threshold bop_toolkit's scores_th=*.json fields (obj_recalls: the recall of
+// each target object; vsd_tau for VSD).
+void add_recall_entries(const std::vector<estimator::BopImageErrors>& images,
+                        const std::vector<double>& thresholds, std::optional<double> tau,
+                        std::map<int, std::vector<estimator::BopRecall>>* per_object,
+                        std::vector<estimator::BopRecall>* overall, Json* entries) {
   std::set<int> objects;
   for (const auto& image : images) {
     for (const auto& entry : image.targets) objects.insert(entry.first);
@@ -249,7 +351,6 @@ Json recall_entries(const std::vector<estimator::BopImageErrors>& images,
       object_images[obj_id].push_back(std::move(only));
     }
   }
-  Json entries = Json::array();
   for (const double threshold : thresholds) {
     const estimator::BopRecall recall = estimator::bop_recall(images, threshold, kBop19VisibGtMin);
     overall->push_back(recall);
@@ -259,29 +360,74 @@ Json recall_entries(const std::vector<estimator::BopImageErrors>& images,
       (*per_object)[obj_id].push_back(object);
       obj_recalls[std::to_string(obj_id)] = object.recall;
     }
-    entries.push_back({{"threshold", recall.threshold},
-                       {"recall", recall.recall},
-                       {"tp_count", recall.tp_count},
-                       {"targets_count", recall.targets_count},
-                       {"gt_count", recall.gt_count},
-                       {"obj_recalls", obj_recalls}});
+    Json entry = {{"threshold", recall.threshold}, {"recall", recall.recall},
+                  {"tp_count", recall.tp_count},   {"targets_count", recall.targets_count},
+                  {"gt_count", recall.gt_count},   {"obj_recalls", obj_recalls}};
+    if (tau) entry["vsd_tau"] = *tau;
+    entries->push_back(std::move(entry));
   }
-  return entries;
+}
+
+// The by-visibility options `evaluate` sets, in the fingerprint (the summary builder of a
+// resume or a merge reads them back from there).
+Json by_visibility_fingerprint(const report::ByVisibilityOptions& options) {
+  return {{"band_edges", options.band_edges},
+          {"correct_metric", report::to_string(options.correct_metric)},
+          {"correct_threshold", options.correct_threshold},
+          {"min_precision", options.min_precision},
+          {"seed", options.seed}};
+}
+
+report::ByVisibilityOptions by_visibility_options(const Json& fingerprint) {
+  report::ByVisibilityOptions options;
+  options.band_edges = fingerprint.at("band_edges").get<std::vector<double>>();
+  options.correct_metric =
+      *report::pose_metric_from_string(fingerprint.at("correct_metric").get<std::string>());
+  options.correct_threshold = fingerprint.at("correct_threshold").get<double>();
+  options.min_precision = fingerprint.at("min_precision").get<double>();
+  options.seed = fingerprint.at("seed").get<std::uint64_t>();
+  return options;
+}
+
+// The by-visibility tables and JSON in OUT (report/by_visibility.hpp; layouts in
+// batch/table_layouts.hpp).
+Json write_by_visibility(const fs::path& out_dir, const report::ByVisibilityAnalysis& analysis) {
+  const std::pair<const batch::TableLayout*, std::string> tables[] = {
+      {&batch::by_visibility_recall_table(), report::format_visibility_recall_csv(analysis)},
+      {&batch::by_visibility_recall_thresholds_table(),
+       report::format_visibility_recall_thresholds_csv(analysis)},
+      {&batch::by_visibility_curve_table(), report::format_visibility_curve_csv(analysis)},
+      {&batch::by_visibility_correlation_table(), report::format_error_correlation_csv(analysis)},
+      {&batch::score_sweep_table(), report::format_score_sweep_csv(analysis)},
+      {&batch::score_recommendation_table(), report::format_score_recommendation_csv(analysis)}};
+  Json files = Json::array();
+  for (const auto& [layout, text] : tables) {
+    batch::write_output_file(out_dir, layout->file_name, text);
+    files.push_back(layout->file_name);
+  }
+  batch::write_output_file(out_dir, "by_visibility.json",
+                           report::by_visibility_json(analysis).dump(2) + "\n");
+  files.push_back("by_visibility.json");
+  return files;
 }
 
 // Collects the evaluated estimates of every results file over the images, in item order, and
-// at the end writes scores.json and returns summary.json.
+// at the end writes scores.json and the by-visibility outputs and returns summary.json.
 class EvaluateSummary : public batch::SummaryBuilder {
  public:
   EvaluateSummary(Json fingerprint, fs::path out_dir)
-      : fingerprint_(std::move(fingerprint)), out_dir_(std::move(out_dir)) {
+      : fingerprint_(std::move(fingerprint)),
+        out_dir_(std::move(out_dir)),
+        metrics_(metrics_of(fingerprint_.at("errors"))),
+        by_visibility_(by_visibility_options(fingerprint_.at("by_visibility"))) {
     for (const Json& file : fingerprint_.at("results")) {
       files_.emplace_back();
       files_.back().name = file.at("name").get<std::string>();
+      for (const PoseMetric metric : metrics_) {
+        files_.back().metrics.push_back({metric, taus_of(metric), {}});
+        files_.back().metrics.back().per_tau.resize(taus_of(metric).size());
+      }
     }
-    const Json& errors = fingerprint_.at("errors");
-    mssd_ = std::find(errors.begin(), errors.end(), "mssd") != errors.end();
-    mspd_ = std::find(errors.begin(), errors.end(), "mspd") != errors.end();
   }
 
   void add(const batch::ItemRecord& record) override {
@@ -300,25 +446,13 @@ class EvaluateSummary : public batch::SummaryBuilder {
     const Json& files = record.summary.at("files");
     for (std::size_t f = 0; f < files_.size(); ++f) {
       FileScores& file = files_[f];
-      estimator::BopImageErrors mssd = image, mspd = image;
       file.estimates_in_images += files[f].at("estimates_in_image").get<long>();
-      for (const Json& estimate : files[f].at("evaluated")) {
-        ++file.evaluated;
-        const int obj_id = estimate.at("obj_id").get<int>();
-        estimator::BopEstimateErrors m{
-            estimate.at("est_id").get<int>(), estimate.at("score").get<double>(), {}};
-        estimator::BopEstimateErrors p = m;
-        const Json& gt_ids = estimate.at("gt_ids");
-        for (std::size_t k = 0; k < gt_ids.size(); ++k) {
-          const int gt_id = gt_ids[k].get<int>();
-          if (mssd_) m.errors.emplace_back(gt_id, error_of(estimate.at("mssd").at(k)));
-          if (mspd_) p.errors.emplace_back(gt_id, error_of(estimate.at("mspd").at(k)));
+      file.evaluated += static_cast<long>(files[f].at("evaluated").size());
+      for (MetricImages& metric : file.metrics) {
+        for (std::size_t t = 0; t < metric.taus.size(); ++t) {
+          metric.per_tau[t].push_back(image_errors(image, files[f], metric.metric, t));
         }
-        mssd.estimates[obj_id].push_back(std::move(m));
-        mspd.estimates[obj_id].push_back(std::move(p));
       }
-      file.mssd.push_back(std::move(mssd));
-      file.mspd.push_back(std::move(mspd));
     }
   }
 
@@ -329,8 +463,9 @@ class EvaluateSummary : public batch::SummaryBuilder {
       Json file_scores = scores_of(files_[f]);
       file_scores["bop19_average_time_per_image"] = entry.at("average_time_per_image_s");
       Json brief = Json::object();
-      for (const char* name : {"bop19_average_recall", "bop19_average_recall_mssd",
-                               "bop19_average_recall_mspd", "bop19_average_time_per_image"}) {
+      for (const char* name :
+           {"bop19_average_recall", "bop19_average_recall_vsd", "bop19_average_recall_mssd",
+            "bop19_average_recall_mspd", "bop19_average_time_per_image"}) {
         if (file_scores.contains(name)) brief[name] = file_scores[name];
       }
       overview[files_[f].name] = brief;
@@ -340,6 +475,12 @@ class EvaluateSummary : public batch::SummaryBuilder {
       scores[files_[f].name] = std::move(file_scores);
     }
     batch::write_output_file(out_dir_, "scores.json", batch::dump_json(scores));
+
+    std::vector<report::MethodTargets> methods;
+    for (const FileScores& file : files_) methods.push_back(method_targets(file));
+    const Json by_visibility_files =
+        write_by_visibility(out_dir_, report::analyse_by_visibility(methods, by_visibility_));
+
     Json summary;
     summary["command"] = "evaluate";
     summary["options"] = fingerprint_;
@@ -348,44 +489,88 @@ class EvaluateSummary : public batch::SummaryBuilder {
     summary["counts"]["targets"] = targets_;
     summary["counts"]["results"] = counts;
     summary["scores"] = overview;
+    summary["by_visibility"] = {
+        {"files", by_visibility_files},
+        {"visibility", "visib_fract"},
+        {"scene_visibility",
+         "not computed: a BOP dataset does not give the Eq. 10 scene visibility, and computing "
+         "it renders every GT instance (`clutterscope visibility` writes it to images.csv)"}};
     summary["note"] =
         "BOP 2019 evaluation (bop_toolkit eval_bop19_pose.py): scores.json holds, per results "
-        "file, the average recalls, the recall per threshold (MSSD: fraction of the object "
-        "diameter; MSPD: px at 640 px image width) and per object. bop19_average_recall (the "
-        "mean of AR_VSD, AR_MSSD, AR_MSPD) is null without VSD. Images that failed under "
-        "--keep-going are missing from the recalls (counts.failures)";
+        "file, the average recalls, the recall per threshold (VSD and MSSD: fraction of the "
+        "object diameter, VSD per tau; MSPD: px at 640 px image width) and per object. "
+        "bop19_average_recall (the mean of AR_VSD, AR_MSSD, AR_MSPD) is null unless all three "
+        "are computed. The by_visibility*.csv and score_*.csv tables and by_visibility.json join "
+        "each counted target's bop19 visib_fract (scene_gt_info.json) to the errors of the "
+        "estimate paired with it; scene visibility (Eq. 10) is left undefined (see "
+        "by_visibility.scene_visibility). Images that failed under --keep-going are missing "
+        "from the recalls and the tables (counts.failures)";
     return summary;
   }
 
  private:
+  // One error type over the images in item order: per tau (one for MSSD and MSPD) the
+  // BopImageErrors of every image.
+  struct MetricImages {
+    PoseMetric metric = PoseMetric::kMssd;
+    std::vector<double> taus;
+    std::vector<std::vector<estimator::BopImageErrors>> per_tau;
+  };
   struct FileScores {
     std::string name;
-    std::vector<estimator::BopImageErrors> mssd, mspd;
+    std::vector<MetricImages> metrics;  // in metrics_ order
     long estimates_in_images = 0, evaluated = 0;
   };
 
+  // The errors of one metric (VSD: at tau index t) of one results file in one image.
+  static estimator::BopImageErrors image_errors(const estimator::BopImageErrors& image,
+                                                const Json& file, PoseMetric metric,
+                                                std::size_t t) {
+    estimator::BopImageErrors errors = image;
+    const char* key = report::to_string(metric);
+    for (const Json& estimate : file.at("evaluated")) {
+      estimator::BopEstimateErrors e{
+          estimate.at("est_id").get<int>(), estimate.at("score").get<double>(), {}};
+      const Json& gt_ids = estimate.at("gt_ids");
+      const Json& values = estimate.at(key);
+      for (std::size_t k = 0; k < gt_ids.size(); ++k) {
+        const Json& value = metric == PoseMetric::kVsd ? values.at(k).at(t) : values.at(k);
+        e.errors.emplace_back(gt_ids[k].get<int>(), error_of(value));
+      }
+      errors.estimates[estimate.at("obj_id").get<int>()].push_back(std::move(e));
+    }
+    return errors;
+  }
+
   Json scores_of(const FileScores& file) const {
     Json scores = Json::object();
-    scores["bop19_average_recall"] = nullptr;  // needs VSD (not available yet)
     Json recalls = Json::object();
     std::map<int, Json> per_object;
-    const auto add_type = [&](const char* type,
-                              const std::vector<estimator::BopImageErrors>& images,
-                              const std::vector<double>& thresholds) {
+    std::vector<double> average_recalls;
+    for (const MetricImages& metric : file.metrics) {
+      const std::string type = report::to_string(metric.metric);
       std::map<int, std::vector<estimator::BopRecall>> objects;
       std::vector<estimator::BopRecall> overall;
-      recalls[type] = recall_entries(images, thresholds, &objects, &overall);
-      scores[std::string("bop19_average_recall_") + type] = estimator::bop_average_recall(overall);
+      Json entries = Json::array();
+      for (std::size_t t = 0; t < metric.taus.size(); ++t) {
+        const std::optional<double> tau = metric.metric == PoseMetric::kVsd
+                                              ? std::optional<double>(metric.taus[t])
+                                              : std::nullopt;
+        add_recall_entries(metric.per_tau[t], score_thresholds(metric.metric), tau, &objects,
+                           &overall, &entries);
+      }
+      recalls[type] = std::move(entries);
+      // AR: the mean over every (tau, threshold) recall (VSD: 100, MSSD and MSPD: 10).
+      average_recalls.push_back(estimator::bop_average_recall(overall));
+      scores["bop19_average_recall_" + type] = average_recalls.back();
       for (const auto& [obj_id, object] : objects) {
-        per_object[obj_id][std::string("bop19_average_recall_") + type] =
-            estimator::bop_average_recall(object);
+        per_object[obj_id]["bop19_average_recall_" + type] = estimator::bop_average_recall(object);
         per_object[obj_id]["targets_count"] = object.front().targets_count;
       }
-    };
-    // VSD goes here when it is available: its errors per tau (per-item "vsd"), recalls per
-    // (tau, threshold), AR_VSD their mean, and bop19_average_recall = bop_mean of the three.
-    if (mssd_) add_type("mssd", file.mssd, estimator::bop19_fraction_thresholds());
-    if (mspd_) add_type("mspd", file.mspd, estimator::bop19_mspd_thresholds_px());
+    }
+    // eval_bop19_pose.py's mean of AR_VSD, AR_MSSD and AR_MSPD: defined with all three only.
+    scores["bop19_average_recall"] =
+        file.metrics.size() == 3 ? Json(estimator::bop_mean(average_recalls)) : Json(nullptr);
     scores["recalls"] = recalls;
     Json objects = Json::object();
     for (auto& [obj_id, entry] : per_object) objects[std::to_string(obj_id)] = entry;
@@ -393,10 +578,116 @@ class EvaluateSummary : public batch::SummaryBuilder {
     return scores;
   }
 
+  const MetricImages& metric_images(const FileScores& file, PoseMetric metric) const {
+    for (const MetricImages& images : file.metrics) {
+      if (images.metric == metric) return images;
+    }
+    throw std::logic_error(std::string("evaluate: ") + report::to_string(metric) +
+                           " was not computed");
+  }
+
+  // The targets of one results file for the analysis by visibility: every counted GT instance
+  // of every evaluated image, the estimate paired with it (by_visibility.hpp's rule, on the
+  // error of the correctness rule's metric) and BOP's own match at every threshold.
+  report::MethodTargets method_targets(const FileScores& file) const {
+    report::MethodTargets method{file.name, {}};
+    const MetricImages& pairing = metric_images(file, by_visibility_.correct_metric);
+    for (std::size_t i = 0; i < pairing.per_tau.front().size(); ++i) {
+      const estimator::BopImageErrors& image = pairing.per_tau.front()[i];
+      const std::vector<bool> valid =
+          estimator::bop_valid_gt(image.gt, image.targets, kBop19VisibGtMin);
+      const int gt_count = static_cast<int>(image.gt.size());
+      for (const auto& target : image.targets) {
+        const int obj_id = target.first;
+        const std::vector<int> paired = pair_estimates(pairing, i, obj_id, valid, gt_count);
+        // recalled[metric][cell][k]: BOP's match at each (tau, threshold) cell.
+        std::map<PoseMetric, std::vector<std::vector<int>>> matches;
+        for (const MetricImages& metric : file.metrics) {
+          for (std::size_t t = 0; t < metric.taus.size(); ++t) {
+            const std::vector<estimator::BopEstimateErrors>& estimates =
+                estimates_of(metric.per_tau[t][i], obj_id);
+            for (const double threshold : score_thresholds(metric.metric)) {
+              matches[metric.metric].push_back(
+                  estimator::bop_match(estimates, valid, threshold, gt_count));
+            }
+          }
+        }
+        for (int k = 0; k < gt_count; ++k) {
+          if (!valid[k] || image.gt[k].obj_id != obj_id) continue;
+          report::TargetOutcome outcome;
+          outcome.scene_id = image.scene_id;
+          outcome.im_id = image.im_id;
+          outcome.obj_id = obj_id;
+          outcome.gt_id = k;
+          outcome.visib_fract = image.gt[k].visib_fract;
+          if (paired[k] >= 0) outcome.estimate = target_estimate(file, i, obj_id, paired[k], k);
+          for (const auto& [metric, cells] : matches) {
+            std::vector<bool>& recalled = outcome.bop_recalled[metric];
+            for (const std::vector<int>& cell : cells) recalled.push_back(cell[k] >= 0);
+          }
+          method.targets.push_back(std::move(outcome));
+        }
+      }
+    }
+    return method;
+  }
+
+  static const std::vector<estimator::BopEstimateErrors>& estimates_of(
+      const estimator::BopImageErrors& image, int obj_id) {
+    static const std::vector<estimator::BopEstimateErrors> kNone;
+    const auto found = image.estimates.find(obj_id);
+    return found == image.estimates.end() ? kNone : found->second;
+  }
+
+  // by_visibility.hpp's pairing: pose_matching's greedy order without a threshold (by
+  // decreasing score each estimate takes the free counted instance with the lowest error) on
+  // the rule's metric, VSD's error being its mean over the taus. An infinite error is a
+  // wrong pose, not no pose: it pairs too, after every finite one (bop_match counts only
+  // errors below its threshold). Per GT instance the paired est_id, or -1.
+  static std::vector<int> pair_estimates(const MetricImages& metric, std::size_t i, int obj_id,
+                                         const std::vector<bool>& valid, int gt_count) {
+    std::vector<estimator::BopEstimateErrors> estimates =
+        estimates_of(metric.per_tau.front()[i], obj_id);
+    for (std::size_t e = 0; e < estimates.size(); ++e) {
+      for (std::size_t g = 0; g < estimates[e].errors.size(); ++g) {
+        double error = 0;
+        for (const auto& per_tau : metric.per_tau) {
+          error += estimates_of(per_tau[i], obj_id)[e].errors[g].second;
+        }
+        error /= static_cast<double>(metric.per_tau.size());
+        estimates[e].errors[g].second =
+            std::isfinite(error) ? error : std::numeric_limits<double>::max();
+      }
+    }
+    return estimator::bop_match(estimates, valid, HUGE_VAL, gt_count);
+  }
+
+  // The errors of estimate est_id of obj_id against GT instance k in image i, per metric.
+  static report::TargetEstimate target_estimate(const FileScores& file, std::size_t i, int obj_id,
+                                                int est_id, int k) {
+    report::TargetEstimate estimate;
+    for (const MetricImages& metric : file.metrics) {
+      for (std::size_t t = 0; t < metric.taus.size(); ++t) {
+        for (const estimator::BopEstimateErrors& e : estimates_of(metric.per_tau[t][i], obj_id)) {
+          if (e.est_id != est_id) continue;
+          estimate.score = e.score;
+          for (const auto& [gt_id, error] : e.errors) {
+            if (gt_id != k) continue;
+            if (metric.metric == PoseMetric::kVsd) estimate.vsd.push_back(error);
+            if (metric.metric == PoseMetric::kMssd) estimate.mssd = error;
+            if (metric.metric == PoseMetric::kMspd) estimate.mspd = error;
+          }
+        }
+      }
+    }
+    return estimate;
+  }
+
   Json fingerprint_;
   fs::path out_dir_;
+  std::vector<PoseMetric> metrics_;
+  report::ByVisibilityOptions by_visibility_;
   std::vector<FileScores> files_;
-  bool mssd_ = false, mspd_ = false;
   long images_ = 0, targets_ = 0;
 };
 
@@ -423,12 +714,15 @@ std::vector<ResultsFile> read_results(const EvaluateJobOptions& options,
   return files;
 }
 
-Json evaluate_fingerprint(const EvaluateJobOptions& options,
-                          const std::vector<ResultsFile>& files) {
+// delta_mm: VSD's delta when VSD is computed.
+Json evaluate_fingerprint(const EvaluateJobOptions& options, const std::vector<ResultsFile>& files,
+                          std::optional<double> delta_mm) {
   Json fingerprint = batch::dataset_fingerprint(options.dataset);
   fingerprint["errors"] = options.errors;
   fingerprint["visib_gt_min"] = kBop19VisibGtMin;
   fingerprint["max_sym_disc_step"] = estimator::kBopMaxSymDiscStep;
+  if (delta_mm) fingerprint["vsd_delta_mm"] = *delta_mm;
+  fingerprint["by_visibility"] = by_visibility_fingerprint(options.by_visibility);
   Json results = Json::array();
   for (const ResultsFile& file : files) {
     // The content identifies the job (a changed file is another job); the counts and the time
@@ -442,6 +736,65 @@ Json evaluate_fingerprint(const EvaluateJobOptions& options,
   }
   fingerprint["results"] = results;
   return fingerprint;
+}
+
+// The dataset's name as bop_toolkit knows datasets: the DATASET folder's name.
+std::string dataset_name(const std::string& dataset) {
+  fs::path path = fs::absolute(dataset).lexically_normal();
+  if (!path.has_filename()) path = path.parent_path();
+  return path.filename().string();
+}
+
+// VSD's delta: --vsd-delta-mm, else eval_bop19_pose.py's for the dataset's name.
+double vsd_delta_mm(const EvaluateJobOptions& options) {
+  if (options.vsd_delta_mm) return *options.vsd_delta_mm;
+  const std::string name = dataset_name(options.dataset.dataset);
+  const std::optional<double> delta = bop19_vsd_delta_mm(name);
+  if (!delta) {
+    throw batch::UsageError(
+        "--vsd-delta-mm: VSD's delta depends on the dataset and bop_toolkit sets it by the "
+        "dataset's name, but '" +
+        name +
+        "' (the name of the DATASET folder) is none of its names (itodd: 5 mm; hb, icbin, icmi, "
+        "lm, lmo, ruapc, tless, tudl, tyol, ycbv, hope: 15 mm). Pass --vsd-delta-mm MM, or "
+        "leave VSD out with --errors mssd,mspd");
+  }
+  return *delta;
+}
+
+// Resolves the default --errors and checks that VSD has a depth image for every target image:
+// explicit vsd without one is bad input (DatasetError naming the file); the default then
+// computes MSSD and MSPD only and says so on stderr.
+std::vector<std::string> resolve_errors(const EvaluateJobOptions& options,
+                                        const datasets::BopDataset& dataset,
+                                        const std::vector<datasets::ImageKey>& items) {
+  const bool by_default = options.errors.empty();
+  std::vector<std::string> errors = options.errors;
+  if (by_default) errors = {"vsd", "mssd", "mspd"};
+  if (!has(errors, "vsd")) return errors;
+  std::optional<datasets::ImageKey> first_missing;
+  std::size_t missing = 0;
+  for (const datasets::ImageKey& key : items) {
+    if (!datasets::bop_depth_path(dataset.root(), key).empty()) continue;
+    if (!first_missing) first_missing = key;
+    ++missing;
+  }
+  if (!first_missing) return errors;
+  const fs::path file = expected_depth_path(dataset.root(), *first_missing);
+  const std::string counts = std::to_string(missing) + " of the " + std::to_string(items.size()) +
+                             " target images have no depth image (depth/IMID.png or .tif)";
+  if (!by_default) {
+    throw datasets::DatasetError(
+        file, datasets::location(first_missing->scene_id, first_missing->im_id) +
+                  "missing: --errors vsd needs the measured depth image of every target image "
+                  "(VSD compares renders with it); " +
+                  counts + ". Leave VSD out with --errors mssd,mspd");
+  }
+  std::fprintf(stderr,
+               "evaluate: errors mssd,mspd only, without VSD: %s is missing (%s); "
+               "bop19_average_recall stays null\n",
+               file.string().c_str(), counts.c_str());
+  return {"mssd", "mspd"};
 }
 
 }  // namespace
@@ -460,27 +813,30 @@ bool EvaluateJobOptions::IsValid(std::string* why) const {
       return false;
     }
   }
-  if (errors.empty()) {
-    *why = "--errors: at least one of mssd, mspd";
-    return false;
-  }
   std::set<std::string> seen;
   for (const std::string& error : errors) {
-    if (error == "vsd") {
-      *why =
-          "--errors: vsd is not available yet (VSD renders every estimate against the depth "
-          "images; it will come in a later version); choose among mssd, mspd, e.g. --errors "
-          "mssd,mspd. Without VSD there is no bop19_average_recall, only AR_MSSD and AR_MSPD";
-      return false;
-    }
-    if (error != "mssd" && error != "mspd") {
-      *why = "--errors: unknown error '" + error + "'; choose among mssd, mspd";
+    if (!report::pose_metric_from_string(error)) {
+      *why = "--errors: unknown error '" + error + "'; choose among vsd, mssd, mspd";
       return false;
     }
     if (!seen.insert(error).second) {
       *why = "--errors: " + error + " given twice";
       return false;
     }
+  }
+  if (vsd_delta_mm) {
+    BopVsdOptions vsd;
+    vsd.delta_mm = *vsd_delta_mm;
+    std::string reason;
+    if (!vsd.IsValid(&reason)) {
+      *why = "--vsd-delta-mm: " + reason;
+      return false;
+    }
+  }
+  std::string reason;
+  if (!by_visibility.IsValid(&reason)) {
+    *why = "by visibility (--visibility-bands, --correct, --min-precision): " + reason;
+    return false;
   }
   return true;
 }
@@ -499,9 +855,6 @@ batch::BatchResult run_evaluate_job(const EvaluateJobOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw batch::UsageError(why);
   EvaluateJobOptions job_options = options;
-  // Errors in a fixed order, so that "mspd,mssd" and "mssd,mspd" are the same job.
-  std::sort(job_options.errors.begin(), job_options.errors.end(),
-            [](const std::string& a, const std::string& b) { return a == "mssd" && b != "mssd"; });
   batch::DatasetOptions& dataset_options = job_options.dataset;
   std::error_code error;
   if (job_options.prefer_models_eval && dataset_options.models_dir == "models" &&
@@ -538,24 +891,62 @@ batch::BatchResult run_evaluate_job(const EvaluateJobOptions& options) {
   const batch::BatchOutputSpec output = evaluate_output_spec();
   job.output = &output;
   job.items = batch::list_selected_images(dataset, dataset_options);
-  job.fingerprint = evaluate_fingerprint(job_options, files);
+  // The errors over every selected image, not a shard's: shards of one job must agree.
+  job_options.errors = resolve_errors(job_options, dataset, job.items);
+  // Errors in a fixed order, so that "mspd,mssd" and "mssd,mspd" are the same job.
+  std::sort(job_options.errors.begin(), job_options.errors.end(),
+            [](const std::string& a, const std::string& b) {
+              return *report::pose_metric_from_string(a) < *report::pose_metric_from_string(b);
+            });
+  const bool vsd = has(job_options.errors, "vsd");
+  const PoseMetric rule = job_options.by_visibility.correct_metric;
+  if (!has(job_options.errors, report::to_string(rule))) {
+    std::string computed;
+    for (const std::string& name : job_options.errors) {
+      computed += (computed.empty() ? "" : ",") + name;
+    }
+    throw batch::UsageError(
+        std::string("--correct: the correctness rule of the analysis by visibility (default "
+                    "mssd:0.1) is on ") +
+        report::to_string(rule) + ", which is not computed (errors " + computed +
+        "); pass --correct METRIC:THRESHOLD with a computed metric, e.g. --correct " +
+        computed.substr(0, computed.find(',')) + ":" +
+        (computed.rfind("mspd", 0) == 0 ? "20" : "0.3"));
+  }
+  std::optional<BopVsdOptions> vsd_options;
+  if (vsd) {
+    vsd_options.emplace();
+    vsd_options->delta_mm = vsd_delta_mm(job_options);
+  }
+  job.fingerprint = evaluate_fingerprint(
+      job_options, files,
+      vsd_options ? std::optional<double>(vsd_options->delta_mm) : std::nullopt);
   const batch::ImageDigest image_digest = batch::bop_image_digest(dataset);
-  job.input_digest = [&dataset, image_digest](const datasets::ImageKey& key,
-                                              batch::FileDigestCache& cache) {
+  job.input_digest = [&dataset, image_digest, vsd](const datasets::ImageKey& key,
+                                                   batch::FileDigestCache& cache) {
     batch::Xxh64 digest;
-    const std::uint64_t parts[2] = {
+    // VSD reads the depth image, which the image digest leaves out.
+    const fs::path depth = vsd ? datasets::bop_depth_path(dataset.root(), key) : fs::path();
+    const std::uint64_t parts[3] = {
         image_digest(key, cache),
-        cache.digest(scene_gt_info_path(dataset, key.split, key.scene_id))};
+        cache.digest(scene_gt_info_path(dataset, key.split, key.scene_id)),
+        depth.empty() ? 0 : cache.digest(depth)};
     digest.update(parts, sizeof(parts));
     return digest.digest();
   };
-  job.make_worker = [&dataset, &job_options, &files, &targets,
-                     &symmetries]() -> batch::ItemFunction {
-    auto worker =
-        std::make_shared<EvaluateWorker>(dataset, job_options, files, targets, symmetries);
+  job.make_worker = [&dataset, &job_options, &files, &targets, &symmetries,
+                     &vsd_options]() -> batch::ItemFunction {
+    auto worker = std::make_shared<EvaluateWorker>(dataset, job_options, files, targets, symmetries,
+                                                   vsd_options);
     return [worker](const datasets::ImageKey& key) { return worker->run(key); };
   };
-  return batch::run_batch(job, batch::batch_options_of(dataset_options, "evaluate"));
+  if (!vsd) return batch::run_batch(job, batch::batch_options_of(dataset_options, "evaluate"));
+  // Set before the workers create their GL contexts (see render/context.hpp).
+  const render::WorkerRasterisationScope rasterisation;
+  const batch::BatchResult result =
+      batch::run_batch(job, batch::batch_options_of(dataset_options, "evaluate"));
+  batch::record_renderer(dataset_options.out, render::renderer_in_use());
+  return result;
 }
 
 }  // namespace clutterscope::scene_estimation

@@ -97,7 +97,9 @@ const TableLayout& evaluate_errors_table() {
   // results: the results file name without .csv; est_id: the estimate's index among the lines
   // of its (scene, image, object) in file order (bop_toolkit's); score and visib_fract as read;
   // gt_valid: 1 when the GT instance counts for the recalls; mssd_mm, mspd_px: empty when not
-  // computed (not in --errors, or MSSD's centres a diameter or more apart: bop_toolkit's inf).
+  // computed (not in --errors, or MSSD's centres a diameter or more apart: bop_toolkit's inf);
+  // vsd_tau=T: VSD at misalignment tolerance T (a fraction of the diameter; named as in
+  // bop_toolkit's per-estimate errors), unitless in [0, 1], empty when not computed.
   static const TableLayout layout{"errors.csv",
                                   {{"results"},
                                    {"scene_id"},
@@ -109,7 +111,17 @@ const TableLayout& evaluate_errors_table() {
                                    {"visib_fract"},
                                    {"gt_valid"},
                                    {"mssd_mm"},
-                                   {"mspd_px"}}};
+                                   {"mspd_px"},
+                                   later("vsd_tau=0.050"),
+                                   later("vsd_tau=0.100"),
+                                   later("vsd_tau=0.150"),
+                                   later("vsd_tau=0.200"),
+                                   later("vsd_tau=0.250"),
+                                   later("vsd_tau=0.300"),
+                                   later("vsd_tau=0.350"),
+                                   later("vsd_tau=0.400"),
+                                   later("vsd_tau=0.450"),
+                                   later("vsd_tau=0.500")}};
   return layout;
 }
 

@@ -366,6 +366,13 @@ const char* to_string(PoseMetric metric) {
   return "?";
 }
 
+std::optional<PoseMetric> pose_metric_from_string(const std::string& name) {
+  for (const PoseMetric metric : {PoseMetric::kVsd, PoseMetric::kMssd, PoseMetric::kMspd}) {
+    if (name == to_string(metric)) return metric;
+  }
+  return std::nullopt;
+}
+
 const char* error_unit(PoseMetric metric) {
   switch (metric) {
     case PoseMetric::kVsd:

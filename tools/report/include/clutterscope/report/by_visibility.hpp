@@ -24,6 +24,8 @@ namespace clutterscope::report {
 
 enum class PoseMetric { kVsd, kMssd, kMspd };
 const char* to_string(PoseMetric metric);  // "vsd", "mssd", "mspd"
+// The metric to_string names; empty for any other name.
+std::optional<PoseMetric> pose_metric_from_string(const std::string& name);
 // The unit of the metric's error and thresholds as written in the tables: "diameter_fraction"
 // (MSSD), "px_at_width_640" (MSPD), "unitless" (VSD, in [0, 1]).
 const char* error_unit(PoseMetric metric);
