@@ -1,7 +1,8 @@
-// `clutterscope evaluate` through the binary (issue 24, part 1), without EGL: the BOP 2019
-// MSSD / MSPD evaluation of the three results files of
-// tests/scene_estimation/data/bop_eval_reference/sample_a against what bop_toolkit computed for
-// them (see its PROVENANCE.md), bad results files, and resume / --shard + merge.
+// `clutterscope evaluate` through the binary (issue 24), without EGL: the BOP 2019 MSSD / MSPD
+// evaluation (--errors mssd,mspd: VSD renders, see evaluate_cli_gl_test.cpp) of the three
+// results files of tests/scene_estimation/data/bop_eval_reference/sample_a against what
+// bop_toolkit computed for them (see its PROVENANCE.md), the analysis by visibility, bad
+// results files and options, the choice of the errors, and resume / --shard + merge.
 //
 // Acceptance (issue 24): every per-estimate MSSD and MSPD within 1e-6 relative of bop_toolkit's,
 // AR_MSSD and AR_MSPD within 1e-6. The test prints the largest deviations it measured.
@@ -21,6 +22,7 @@
 
 #include "bop_fixture_support.hpp"
 #include "cli_run.hpp"
+#include "evaluate_cli_support.hpp"
 
 namespace clutterscope::cli {
 namespace {
@@ -34,25 +36,17 @@ using clutterscope::testing::ScratchDir;
 using clutterscope::testing::write_text;
 using Json = nlohmann::json;
 
-const fs::path kReference =
-    fs::path(CLUTTERSCOPE_SOURCE_DIR) / "tests/scene_estimation/data/bop_eval_reference/sample_a";
+const fs::path& kReference = clutterscope::testing::kEvaluateReference;
 const fs::path kSample = fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "ycbv_real";
-const std::vector<std::string> kVariants = {"small", "large", "mixed"};
+const std::vector<std::string>& kVariants = clutterscope::testing::kEvaluateVariants;
+using clutterscope::testing::lines_of;
 
 std::vector<std::string> split(const std::string& text, char separator) {
-  std::vector<std::string> fields;
-  std::stringstream cells(text);
-  for (std::string cell; std::getline(cells, cell, separator);) fields.push_back(cell);
-  if (!text.empty() && text.back() == separator) fields.emplace_back();
-  return fields;
+  return clutterscope::testing::split_fields(text, separator);
 }
 
-// The lines of a text, without the empty one after its final newline.
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> lines = split(text, '\n');
-  if (!lines.empty() && lines.back().empty()) lines.pop_back();
-  return lines;
-}
+// The errors every test here computes: VSD would render.
+const std::string kNoVsd = " --errors mssd,mspd";
 
 // (results, scene, image, object, est_id, gt_id) -> (MSSD mm, MSPD px); inf when not computed.
 using ErrorKey = std::tuple<std::string, int, int, int, int, int>;
@@ -63,16 +57,18 @@ double number_or_inf(const std::string& field) {
 }
 
 // Our errors.csv: results,scene_id,im_id,obj_id,est_id,gt_id,score,visib_fract,gt_valid,
-// mssd_mm,mspd_px.
+// mssd_mm,mspd_px,vsd_tau=0.050..vsd_tau=0.500 (empty here: no VSD).
 Errors read_ours(const fs::path& path) {
   const std::vector<std::string> lines = lines_of(read_text(path));
   EXPECT_EQ(lines.at(0),
             "results,scene_id,im_id,obj_id,est_id,gt_id,score,visib_fract,gt_valid,mssd_mm,"
-            "mspd_px");
+            "mspd_px,vsd_tau=0.050,vsd_tau=0.100,vsd_tau=0.150,vsd_tau=0.200,vsd_tau=0.250,"
+            "vsd_tau=0.300,vsd_tau=0.350,vsd_tau=0.400,vsd_tau=0.450,vsd_tau=0.500");
   Errors rows;
   for (std::size_t i = 1; i < lines.size(); ++i) {
     const std::vector<std::string> f = split(lines[i], ',');
-    EXPECT_EQ(f.size(), 11u) << lines[i];
+    EXPECT_EQ(f.size(), 21u) << lines[i];
+    for (std::size_t c = 11; c < f.size(); ++c) EXPECT_EQ(f[c], "") << lines[i];
     rows[{f[0], std::stoi(f[1]), std::stoi(f[2]), std::stoi(f[3]), std::stoi(f[4]),
           std::stoi(f[5])}] = {number_or_inf(f[9]), number_or_inf(f[10])};
   }
@@ -104,13 +100,7 @@ class EvaluateCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     scratch_ = new ScratchDir("evaluate_cli");
-    fs::copy(kSample, dataset(), fs::copy_options::recursive);
-    fs::copy_file(kReference / "models/models_info.json", dataset() / "models/models_info.json",
-                  fs::copy_options::overwrite_existing);
-    for (const char* scene : {"000000", "000003"}) {
-      fs::copy_file(kReference / "test" / scene / "scene_gt_info.json",
-                    dataset() / "test" / scene / "scene_gt_info.json");
-    }
+    clutterscope::testing::write_evaluate_dataset(dataset());
   }
   static void TearDownTestSuite() {
     delete scratch_;
@@ -119,12 +109,14 @@ class EvaluateCli : public ::testing::Test {
   static fs::path dataset() { return scratch_->path() / "ycbv_real"; }
   static fs::path scratch() { return scratch_->path(); }
 
-  // `evaluate` of the sample with the reference targets; `extra` is appended.
+  // `evaluate` of the sample with the reference targets; `extra` is appended, after
+  // --errors mssd,mspd unless it has --errors.
   static CommandRun evaluate(const std::string& results, const fs::path& out,
                              const std::string& extra = "") {
+    const std::string errors = extra.find("--errors") == std::string::npos ? kNoVsd : "";
     return run_clutterscope("evaluate " + quoted(dataset()) + " --targets " +
                             quoted(kReference / "test_targets_bop19.json") + " --results " +
-                            results + " --out " + quoted(out) + " -q " + extra);
+                            results + " --out " + quoted(out) + " -q" + errors + " " + extra);
   }
   static std::string all_results() {
     std::string files;
@@ -200,6 +192,8 @@ TEST_F(EvaluateCli, MssdMspdAndAverageRecallsMatchBopToolkit) {
               << "\n";
   }
   EXPECT_TRUE(ours.empty()) << ours.size() << " rows bop_toolkit did not evaluate";
+  // By visibility: the tables, with the scores' AR_MSSD and AR_MSPD over all targets.
+  clutterscope::testing::expect_by_visibility_matches_scores(out, {"mssd", "mspd"});
 
   // The mixed file: 16 estimates, 8 evaluated (the best of each target, none of objects that
   // are no targets of their image, one target missed).
@@ -221,7 +215,7 @@ TEST_F(EvaluateCli, ResumeAndShardsGiveTheSameBytes) {
   const CommandRun resume =
       run_clutterscope("evaluate " + quoted(dataset()) + " --targets " +
                        quoted(kReference / "test_targets_bop19.json") + " --results " +
-                       all_results() + " --out " + quoted(resumed));
+                       all_results() + " --out " + quoted(resumed) + kNoVsd);
   ASSERT_EQ(resume.exit_code, 0) << resume.errors;
   EXPECT_NE(resume.errors.find("2 resumed"), std::string::npos) << resume.errors;
 
@@ -234,11 +228,129 @@ TEST_F(EvaluateCli, ResumeAndShardsGiveTheSameBytes) {
                                             " --out " + quoted(merged) + " -q");
   ASSERT_EQ(merge.exit_code, 0) << merge.errors;
 
-  for (const char* file : {"errors.csv", "scores.json", "summary.json"}) {
+  for (const char* file : {"errors.csv", "scores.json", "summary.json", "by_visibility_recall.csv",
+                           "score_sweep.csv", "by_visibility.json"}) {
     const std::string bytes = read_text(whole / file);
     EXPECT_EQ(read_text(resumed / file), bytes) << file;
     EXPECT_EQ(read_text(merged / file), bytes) << file;
   }
+}
+
+// The default errors are all three with depth images, else MSSD and MSPD, said on stderr;
+// explicit VSD without depth images is bad input naming the missing file; VSD's delta comes from
+// the dataset's name or --vsd-delta-mm. None of these runs renders.
+TEST_F(EvaluateCli, ChoosesErrorsByDepthImagesAndVsdDeltaByDatasetName) {
+  const std::string small = quoted(kReference / "results" / "small.csv");
+  const std::string targets = " --targets " + quoted(kReference / "test_targets_bop19.json");
+  const fs::path no_depth = scratch() / "ycbv";
+  fs::copy(dataset(), no_depth, fs::copy_options::recursive);
+  for (const char* scene : {"000000", "000003"})
+    fs::remove_all(no_depth / "test" / scene / "depth");
+
+  // Default: no depth images, so MSSD and MSPD only, and stderr says why.
+  const CommandRun by_default =
+      run_clutterscope("evaluate " + quoted(no_depth) + targets + " --results " + small +
+                       " --out " + quoted(scratch() / "no_depth_default") + " -q");
+  ASSERT_EQ(by_default.exit_code, 0) << by_default.errors;
+  EXPECT_NE(by_default.errors.find("evaluate: errors mssd,mspd only, without VSD: " +
+                                   (no_depth / "test" / "000000" / "depth").string()),
+            std::string::npos)
+      << by_default.errors;
+  EXPECT_NE(by_default.errors.find("3 of the 3 target images have no depth image"),
+            std::string::npos)
+      << by_default.errors;
+  const Json summary =
+      Json::parse(read_text(scratch() / "no_depth_default" / "summary.json")).at("options");
+  EXPECT_EQ(summary.at("errors"), Json({"mssd", "mspd"}));
+  EXPECT_FALSE(summary.contains("vsd_delta_mm"));
+
+  // Explicit VSD without depth images: exit 3 naming the file, nothing written.
+  const CommandRun vsd =
+      run_clutterscope("evaluate " + quoted(no_depth) + targets + " --results " + small +
+                       " --out " + quoted(scratch() / "no_depth_vsd") + " -q --errors mssd,vsd");
+  EXPECT_EQ(vsd.exit_code, 3) << vsd.errors;
+  EXPECT_NE(vsd.errors.find((no_depth / "test" / "000000" / "depth").string()), std::string::npos)
+      << vsd.errors;
+  EXPECT_NE(vsd.errors.find(".png: scene 0, image "), std::string::npos) << vsd.errors;
+  EXPECT_NE(vsd.errors.find("missing: --errors vsd needs the measured depth image"),
+            std::string::npos)
+      << vsd.errors;
+  EXPECT_FALSE(fs::exists(scratch() / "no_depth_vsd" / "errors.csv"));
+
+  // With depth images VSD is in by default, and "ycbv_real" is no name bop_toolkit has a delta
+  // for: a usage error before anything renders; so is a delta that is not a positive number.
+  const CommandRun unknown =
+      run_clutterscope("evaluate " + quoted(dataset()) + targets + " --results " + small +
+                       " --out " + quoted(scratch() / "unknown_name") + " -q");
+  EXPECT_EQ(unknown.exit_code, 2) << unknown.errors;
+  EXPECT_NE(unknown.errors.find("--vsd-delta-mm: VSD's delta depends on the dataset"),
+            std::string::npos)
+      << unknown.errors;
+  EXPECT_NE(unknown.errors.find("'ycbv_real'"), std::string::npos) << unknown.errors;
+  const CommandRun zero =
+      evaluate(small, scratch() / "zero_delta", "--errors vsd --vsd-delta-mm 0");
+  EXPECT_EQ(zero.exit_code, 2) << zero.errors;
+  EXPECT_NE(zero.errors.find("--vsd-delta-mm: "), std::string::npos) << zero.errors;
+  const CommandRun unknown_error = evaluate(small, scratch() / "add", "--errors add");
+  EXPECT_EQ(unknown_error.exit_code, 2);
+  EXPECT_NE(
+      unknown_error.errors.find("--errors: unknown error 'add'; choose among vsd, mssd, mspd"),
+      std::string::npos)
+      << unknown_error.errors;
+}
+
+// The by-visibility flags reach the analysis, and bad ones are usage errors.
+TEST_F(EvaluateCli, ByVisibilityFlagsAreUsedAndValidated) {
+  const std::string small = quoted(kReference / "results" / "small.csv");
+  const fs::path out = scratch() / "by_visibility_flags";
+  const CommandRun run = evaluate(small, out,
+                                  "--visibility-bands 0,0.5,1 --correct mspd:20 "
+                                  "--min-precision 0.9 --seed 7");
+  ASSERT_EQ(run.exit_code, 0) << run.errors;
+  const Json options = Json::parse(read_text(out / "by_visibility.json")).at("options");
+  EXPECT_EQ(options.at("band_edges"), Json({0.0, 0.5, 1.0}));
+  EXPECT_EQ(options.at("correct_metric"), "mspd");
+  EXPECT_EQ(options.at("correct_threshold"), 20.0);
+  EXPECT_EQ(options.at("min_precision"), 0.9);
+  EXPECT_EQ(options.at("seed"), 7);
+  int bands = 0;
+  for (const auto& row : clutterscope::testing::read_csv_rows(out / "by_visibility_recall.csv")) {
+    bands += row.at("scope") == "band" && row.at("metric") == "mssd" ? 1 : 0;
+  }
+  EXPECT_EQ(bands, 2);
+  for (const auto& row : clutterscope::testing::read_csv_rows(out / "score_recommendation.csv")) {
+    EXPECT_EQ(row.at("correct_metric"), "mspd");
+  }
+  clutterscope::testing::expect_by_visibility_matches_scores(out, {"mssd", "mspd"});
+
+  struct Case {
+    std::string flags;
+    std::string says;
+  };
+  const std::vector<Case> cases = {
+      {"--correct mssd", "--correct: expected METRIC:THRESHOLD"},
+      {"--correct add:0.1", "--correct: expected METRIC:THRESHOLD"},
+      {"--correct mssd:x", "--correct: expected METRIC:THRESHOLD"},
+      {"--correct mssd:0",
+       "by visibility (--visibility-bands, --correct, --min-precision): "
+       "correctness threshold must be > 0"},
+      {"--correct vsd:0.3", "--correct: the correctness rule of the analysis by visibility"},
+      {"--visibility-bands 0,0.5", "visibility band edges must start at 0 and end at 1"},
+      {"--visibility-bands 0,0.5,0.4,1", "visibility band edges must increase strictly"},
+      {"--min-precision 1.5", "minimum precision must be in (0, 1]"}};
+  for (const Case& c : cases) {
+    const CommandRun bad = evaluate(small, scratch() / "bad_flags", c.flags);
+    EXPECT_EQ(bad.exit_code, 2) << c.flags << "\n" << bad.errors;
+    EXPECT_NE(bad.errors.find(c.says), std::string::npos) << c.flags << "\n" << bad.errors;
+    EXPECT_FALSE(fs::exists(scratch() / "bad_flags" / "errors.csv")) << c.flags;
+  }
+  // --errors mspd with the default rule (mssd:0.1): the rule's metric must be computed.
+  const CommandRun mspd_only = evaluate(small, scratch() / "bad_flags", "--errors mspd");
+  EXPECT_EQ(mspd_only.exit_code, 2);
+  EXPECT_NE(mspd_only.errors.find("pass --correct METRIC:THRESHOLD with a computed metric, e.g. "
+                                  "--correct mspd:20"),
+            std::string::npos)
+      << mspd_only.errors;
 }
 
 // A copy of small.csv with line `line` (1-based, 1 = header) replaced by `text`.
@@ -304,13 +416,8 @@ TEST_F(EvaluateCli, BadResultsFilesExitThreeNamingFileLineAndField) {
   }
 }
 
-TEST_F(EvaluateCli, RefusesVsdTwoFilesOfOneNameAndMissingTargetsOrGtInfo) {
+TEST_F(EvaluateCli, RefusesTwoFilesOfOneNameAndMissingTargetsOrGtInfo) {
   const std::string small = quoted(kReference / "results" / "small.csv");
-  const CommandRun vsd = evaluate(small, scratch() / "vsd", "--errors mssd,vsd");
-  EXPECT_EQ(vsd.exit_code, 2);
-  EXPECT_NE(vsd.errors.find("--errors: vsd is not available yet"), std::string::npos) << vsd.errors;
-  EXPECT_FALSE(fs::exists(scratch() / "vsd"));
-
   const fs::path copy = scratch() / "other" / "small.csv";
   write_text(copy, read_text(kReference / "results" / "small.csv"));
   const CommandRun twice = evaluate(small + " " + quoted(copy), scratch() / "twice");
@@ -332,7 +439,7 @@ TEST_F(EvaluateCli, RefusesVsdTwoFilesOfOneNameAndMissingTargetsOrGtInfo) {
   fs::copy(kSample, bare, fs::copy_options::recursive);
   const CommandRun no_info = run_clutterscope(
       "evaluate " + quoted(bare) + " --targets " + quoted(kReference / "test_targets_bop19.json") +
-      " --results " + small + " --out " + quoted(scratch() / "no_info") + " -q");
+      " --results " + small + " --out " + quoted(scratch() / "no_info") + " -q" + kNoVsd);
   EXPECT_EQ(no_info.exit_code, 3);
   EXPECT_NE(no_info.errors.find((bare / "test" / "000000" / "scene_gt_info.json").string() +
                                 ": missing: evaluate needs the bop19 visib_fract"),
@@ -343,9 +450,10 @@ TEST_F(EvaluateCli, RefusesVsdTwoFilesOfOneNameAndMissingTargetsOrGtInfo) {
   // recalls cover the other images only.
   fs::copy_file(kReference / "test/000000/scene_gt_info.json",
                 bare / "test/000000/scene_gt_info.json");
-  const CommandRun keep_going = run_clutterscope(
-      "evaluate " + quoted(bare) + " --targets " + quoted(kReference / "test_targets_bop19.json") +
-      " --results " + small + " --out " + quoted(scratch() / "keep_going") + " -q --keep-going");
+  const CommandRun keep_going =
+      run_clutterscope("evaluate " + quoted(bare) + " --targets " +
+                       quoted(kReference / "test_targets_bop19.json") + " --results " + small +
+                       " --out " + quoted(scratch() / "keep_going") + " -q --keep-going" + kNoVsd);
   EXPECT_EQ(keep_going.exit_code, 1) << keep_going.errors;
   const Json summary = Json::parse(read_text(scratch() / "keep_going" / "summary.json"));
   ASSERT_EQ(summary.at("counts").at("failures").size(), 1u);
@@ -380,7 +488,7 @@ TEST_F(EvaluateCli, ModelsEvalIsUsedWhereItExists) {
   }
   const std::string common = "evaluate " + quoted(with_eval) + " --targets " +
                              quoted(kReference / "test_targets_bop19.json") + " --results " +
-                             quoted(kReference / "results" / "mixed.csv") + " -q --out ";
+                             quoted(kReference / "results" / "mixed.csv") + kNoVsd + " -q --out ";
   const CommandRun eval = run_clutterscope(common + quoted(scratch() / "eval_models"));
   ASSERT_EQ(eval.exit_code, 0) << eval.errors;
   const Json scores = Json::parse(read_text(scratch() / "eval_models" / "scores.json"));
