@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <cctype>
 #include <clutterscope/datasets/bop.hpp>
+#include <clutterscope/datasets/bop_image_files.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/files.hpp>
 #include <cmath>

@@ -5,6 +5,7 @@
 #include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/bop_gt_info.hpp>
+#include <clutterscope/datasets/bop_image_files.hpp>
 #include <clutterscope/datasets/bop_pose_models.hpp>
 #include <clutterscope/datasets/bop_results.hpp>
 #include <clutterscope/datasets/errors.hpp>

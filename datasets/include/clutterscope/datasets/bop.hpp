@@ -151,11 +151,6 @@ class BopDataset {
 // the view has no depth, or the file is missing or malformed.
 cv::Mat load_depth(const SceneView& view);
 
-// The measured depth image of `key` under the dataset folder `root` where load() finds it
-// (SPLIT/SCENE/depth/IMID.png, else .tif), without reading any JSON: for checking a whole
-// selection before a job starts. Empty when neither exists.
-std::filesystem::path bop_depth_path(const std::filesystem::path& root, const ImageKey& key);
-
 // Writes a depth image (CV_32F metres, 0 = no surface) as a BOP 16-bit PNG holding
 // round(depth_mm / depth_scale), atomically. Throws DatasetError for a negative or non-finite
 // depth or one that does not fit 16 bits at this depth_scale.
