@@ -329,9 +329,9 @@ class EvaluateWorker {
 
 // The recalls of one error type (one VSD tau) over `images`, in scores.json's layout, appended
 // to `entries`: per threshold bop_toolkit's scores_th=*.json fields (obj_recalls: the recall of
-// each target object; vsd_tau for VSD).
+// each target object; vsd_tau for VSD, tau NaN for the others).
 void add_recall_entries(const std::vector<estimator::BopImageErrors>& images,
-                        const std::vector<double>& thresholds, std::optional<double> tau,
+                        const std::vector<double>& thresholds, double tau,
                         std::map<int, std::vector<estimator::BopRecall>>* per_object,
                         std::vector<estimator::BopRecall>* overall, Json* entries) {
   std::set<int> objects;
@@ -364,7 +364,7 @@ void add_recall_entries(const std::vector<estimator::BopImageErrors>& images,
     Json entry = {{"threshold", recall.threshold}, {"recall", recall.recall},
                   {"tp_count", recall.tp_count},   {"targets_count", recall.targets_count},
                   {"gt_count", recall.gt_count},   {"obj_recalls", obj_recalls}};
-    if (tau) entry["vsd_tau"] = *tau;
+    if (!std::isnan(tau)) entry["vsd_tau"] = tau;
     entries->push_back(std::move(entry));
   }
 }
@@ -554,11 +554,8 @@ class EvaluateSummary : public batch::SummaryBuilder {
       std::vector<estimator::BopRecall> overall;
       Json entries = Json::array();
       for (std::size_t t = 0; t < metric.taus.size(); ++t) {
-        const std::optional<double> tau = metric.metric == PoseMetric::kVsd
-                                              ? std::optional<double>(metric.taus[t])
-                                              : std::nullopt;
-        add_recall_entries(metric.per_tau[t], score_thresholds(metric.metric), tau, &objects,
-                           &overall, &entries);
+        add_recall_entries(metric.per_tau[t], score_thresholds(metric.metric), metric.taus[t],
+                           &objects, &overall, &entries);
       }
       recalls[type] = std::move(entries);
       // AR: the mean over every (tau, threshold) recall (VSD: 100, MSSD and MSPD: 10).
