@@ -278,7 +278,7 @@ TEST_F(EvaluateCli, ChoosesErrorsByDepthImagesAndVsdDeltaByDatasetName) {
   EXPECT_FALSE(fs::exists(scratch() / "no_depth_vsd" / "errors.csv"));
 
   // With depth images VSD is in by default, and "ycbv_real" is no name bop_toolkit has a delta
-  // for: a usage error before anything renders; so is a delta that is not a positive number.
+  // for: a usage error before anything renders; so is a negative delta.
   const CommandRun unknown =
       run_clutterscope("evaluate " + quoted(dataset()) + targets + " --results " + small +
                        " --out " + quoted(scratch() / "unknown_name") + " -q");
@@ -287,10 +287,12 @@ TEST_F(EvaluateCli, ChoosesErrorsByDepthImagesAndVsdDeltaByDatasetName) {
             std::string::npos)
       << unknown.errors;
   EXPECT_NE(unknown.errors.find("'ycbv_real'"), std::string::npos) << unknown.errors;
-  const CommandRun zero =
-      evaluate(small, scratch() / "zero_delta", "--errors vsd --vsd-delta-mm 0");
-  EXPECT_EQ(zero.exit_code, 2) << zero.errors;
-  EXPECT_NE(zero.errors.find("--vsd-delta-mm: "), std::string::npos) << zero.errors;
+  const CommandRun negative =
+      evaluate(small, scratch() / "negative_delta", "--errors vsd,mssd --vsd-delta-mm -1");
+  EXPECT_EQ(negative.exit_code, 2) << negative.errors;
+  EXPECT_NE(negative.errors.find("--vsd-delta-mm: delta_mm must be a finite length >= 0"),
+            std::string::npos)
+      << negative.errors;
   const CommandRun unknown_error = evaluate(small, scratch() / "add", "--errors add");
   EXPECT_EQ(unknown_error.exit_code, 2);
   EXPECT_NE(
