@@ -17,6 +17,7 @@
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/report/by_visibility.hpp>
+#include <clutterscope/report/tables.hpp>
 #include <clutterscope/scene_estimation/bop_vsd.hpp>
 #include <clutterscope/scene_estimation/evaluate_job.hpp>
 #include <clutterscope/visibility/bop_visibility.hpp>
@@ -390,9 +391,10 @@ report::ByVisibilityOptions by_visibility_options(const Json& fingerprint) {
   return options;
 }
 
-// The by-visibility tables and JSON in OUT (report/by_visibility.hpp; layouts in
+// The by-visibility tables and JSON in OUT/folder (report/by_visibility.hpp; layouts in
 // batch/table_layouts.hpp).
-Json write_by_visibility(const fs::path& out_dir, const report::ByVisibilityAnalysis& analysis) {
+Json write_by_visibility(const fs::path& out_dir, const std::string& folder,
+                         const report::ByVisibilityAnalysis& analysis) {
   const std::pair<const batch::TableLayout*, std::string> tables[] = {
       {&batch::by_visibility_recall_table(), report::format_visibility_recall_csv(analysis)},
       {&batch::by_visibility_recall_thresholds_table(),
@@ -403,12 +405,12 @@ Json write_by_visibility(const fs::path& out_dir, const report::ByVisibilityAnal
       {&batch::score_recommendation_table(), report::format_score_recommendation_csv(analysis)}};
   Json files = Json::array();
   for (const auto& [layout, text] : tables) {
-    batch::write_output_file(out_dir, layout->file_name, text);
-    files.push_back(layout->file_name);
+    batch::write_output_file(out_dir, folder + layout->file_name, text);
+    files.push_back(folder + layout->file_name);
   }
-  batch::write_output_file(out_dir, "by_visibility.json",
+  batch::write_output_file(out_dir, folder + "by_visibility.json",
                            report::by_visibility_json(analysis).dump(2) + "\n");
-  files.push_back("by_visibility.json");
+  files.push_back(folder + "by_visibility.json");
   return files;
 }
 
@@ -480,7 +482,11 @@ class EvaluateSummary : public batch::SummaryBuilder {
     std::vector<report::MethodTargets> methods;
     for (const FileScores& file : files_) methods.push_back(method_targets(file));
     const Json by_visibility_files =
-        write_by_visibility(out_dir_, report::analyse_by_visibility(methods, by_visibility_));
+        write_by_visibility(out_dir_, "", report::analyse_by_visibility(methods, by_visibility_));
+    Json scene_visibility_files;
+    if (fingerprint_.contains("scene_visibility")) {
+      scene_visibility_files = write_by_scene_visibility(&methods);
+    }
 
     Json summary;
     summary["command"] = "evaluate";
@@ -496,6 +502,11 @@ class EvaluateSummary : public batch::SummaryBuilder {
         {"scene_visibility",
          "not computed: a BOP dataset does not give the Eq. 10 scene visibility, and computing "
          "it renders every GT instance (`clutterscope visibility` writes it to images.csv)"}};
+    if (!scene_visibility_files.is_null()) {
+      summary["by_visibility"]["scene_visibility"] = {
+          {"files", scene_visibility_files},
+          {"images_csv", fingerprint_.at("scene_visibility").at("file")}};
+    }
     summary["note"] =
         "BOP 2019 evaluation (bop_toolkit eval_bop19_pose.py): scores.json holds, per results "
         "file, the average recalls, the recall per threshold (VSD and MSSD: fraction of the "
@@ -574,6 +585,30 @@ class EvaluateSummary : public batch::SummaryBuilder {
     for (auto& [obj_id, entry] : per_object) objects[std::to_string(obj_id)] = entry;
     scores["per_object"] = objects;
     return scores;
+  }
+
+  // The analysis by the Eq. 10 scene visibility of each target's image (images.csv of
+  // `clutterscope visibility`, named in the fingerprint) in OUT/by_scene_visibility/.
+  Json write_by_scene_visibility(std::vector<report::MethodTargets>* methods) const {
+    const fs::path images_csv = fingerprint_.at("scene_visibility").at("file").get<std::string>();
+    // images.csv keys images by the split's folder, as ImageKey does.
+    const std::string split = fingerprint_.at("scene_visibility").at("split").get<std::string>();
+    std::map<std::pair<int, int>, double> scene_visibility;
+    for (const report::ImageVisibilityRow& row : report::read_images_csv(images_csv)) {
+      if (row.split == split && row.scene_visibility) {
+        scene_visibility[{row.scene_id, row.im_id}] = *row.scene_visibility;
+      }
+    }
+    for (report::MethodTargets& method : *methods) {
+      for (report::TargetOutcome& target : method.targets) {
+        const auto found = scene_visibility.find({target.scene_id, target.im_id});
+        if (found != scene_visibility.end()) target.scene_visibility = found->second;
+      }
+    }
+    report::ByVisibilityOptions options = by_visibility_;
+    options.visibility = report::VisibilityMeasure::kScene;
+    return write_by_visibility(out_dir_, "by_scene_visibility/",
+                               report::analyse_by_visibility(*methods, options));
   }
 
   const MetricImages& metric_images(const FileScores& file, PoseMetric metric) const {
@@ -733,6 +768,13 @@ Json evaluate_fingerprint(const EvaluateJobOptions& options, const std::vector<R
          {"average_time_per_image_s", datasets::bop19_average_time_per_image(file.estimates)}});
   }
   fingerprint["results"] = results;
+  if (!options.scene_visibility_images.empty()) {
+    const fs::path images = options.scene_visibility_images;
+    fingerprint["scene_visibility"] = {
+        {"file", fs::absolute(images).string()},
+        {"split", batch::split_folder(options.dataset)},
+        {"xxh64", batch::format_hex64(batch::xxh64(datasets::read_file(images)))}};
+  }
   return fingerprint;
 }
 
@@ -765,7 +807,8 @@ double vsd_delta_mm(const EvaluateJobOptions& options) {
 // computes MSSD and MSPD only and says so on stderr.
 std::vector<std::string> resolve_errors(const EvaluateJobOptions& options,
                                         const datasets::BopDataset& dataset,
-                                        const std::vector<datasets::ImageKey>& items) {
+                                        const std::vector<datasets::ImageKey>& items,
+                                        bool say_on_stderr) {
   const bool by_default = options.errors.empty();
   std::vector<std::string> errors = options.errors;
   if (by_default) errors = {"vsd", "mssd", "mspd"};
@@ -788,6 +831,7 @@ std::vector<std::string> resolve_errors(const EvaluateJobOptions& options,
                   "(VSD compares renders with it); " +
                   counts + ". Leave VSD out with --errors mssd,mspd");
   }
+  if (!say_on_stderr) return {"mssd", "mspd"};
   std::fprintf(stderr,
                "evaluate: errors mssd,mspd only, without VSD: %s is missing (%s); "
                "bop19_average_recall stays null\n",
@@ -849,7 +893,10 @@ batch::BatchOutputSpec evaluate_output_spec() {
   return spec;
 }
 
-batch::BatchResult run_evaluate_job(const EvaluateJobOptions& options) {
+namespace {
+
+// run_evaluate_job, or with check_only its checks alone (nothing written, nothing said).
+batch::BatchResult evaluate(const EvaluateJobOptions& options, bool check_only) {
   std::string why;
   if (!options.IsValid(&why)) throw batch::UsageError(why);
   EvaluateJobOptions job_options = options;
@@ -890,7 +937,7 @@ batch::BatchResult run_evaluate_job(const EvaluateJobOptions& options) {
   job.output = &output;
   job.items = batch::list_selected_images(dataset, dataset_options);
   // The errors over every selected image, not a shard's: shards of one job must agree.
-  job_options.errors = resolve_errors(job_options, dataset, job.items);
+  job_options.errors = resolve_errors(job_options, dataset, job.items, !check_only);
   // Errors in a fixed order, so that "mspd,mssd" and "mssd,mspd" are the same job.
   std::sort(job_options.errors.begin(), job_options.errors.end(),
             [](const std::string& a, const std::string& b) {
@@ -915,6 +962,22 @@ batch::BatchResult run_evaluate_job(const EvaluateJobOptions& options) {
   if (vsd) {
     vsd_options.emplace();
     vsd_options->delta_mm = vsd_delta_mm(job_options);
+  }
+  if (check_only) {
+    // The run finds a missing scene_gt_info.json per image (a failed image under --keep-going);
+    // a front end running other steps first wants it before.
+    std::error_code missing;
+    for (const datasets::ImageKey& key : job.items) {
+      const fs::path path = scene_gt_info_path(dataset, key.split, key.scene_id);
+      if (!fs::is_regular_file(path, missing)) {
+        throw datasets::DatasetError(
+            path,
+            "missing: the evaluation needs the bop19 visib_fract of every GT instance, "
+            "which decides the GT instances that count (bop_toolkit's calc_gt_info.py "
+            "writes it; so does `clutterscope visibility --mode bop19 --write-bop-info`)");
+      }
+    }
+    return {};
   }
   job.fingerprint = evaluate_fingerprint(
       job_options, files,
@@ -946,5 +1009,13 @@ batch::BatchResult run_evaluate_job(const EvaluateJobOptions& options) {
   batch::record_renderer(dataset_options.out, render::renderer_in_use());
   return result;
 }
+
+}  // namespace
+
+batch::BatchResult run_evaluate_job(const EvaluateJobOptions& options) {
+  return evaluate(options, false);
+}
+
+void check_evaluate_job(const EvaluateJobOptions& options) { evaluate(options, true); }
 
 }  // namespace clutterscope::scene_estimation

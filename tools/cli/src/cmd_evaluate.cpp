@@ -52,8 +52,70 @@ std::string joined(const std::vector<double>& values) {
 
 }  // namespace
 
+scene_estimation::EvaluateJobOptions EvaluateFlags::options() const {
+  scene_estimation::EvaluateJobOptions options = job;
+  if (!correct.empty()) parse_correct_rule(correct, &options.by_visibility);
+  // An explicit --models-dir is used as given; otherwise models_eval where it exists.
+  options.prefer_models_eval = !models_dir_given;
+  return options;
+}
+
+void add_evaluate_options(CLI::App& command, EvaluateFlags* flags) {
+  scene_estimation::EvaluateJobOptions* options = &flags->job;
+  add_dataset_options(command, &options->dataset);
+  command.get_option("--models-dir")->each([flags](const std::string&) {
+    flags->models_dir_given = true;
+  });
+  command
+      .add_option("--results", options->results,
+                  "BOP 2019 results CSV files; outputs are keyed by each file's name without "
+                  ".csv")
+      ->type_name("FILE")
+      ->required()
+      ->check(CLI::Validator(CLI::ExistingFile).description(""));
+  command
+      .add_option("--errors", options->errors,
+                  "pose errors to compute, comma-separated: vsd, mssd, mspd. Default: all "
+                  "three when every target image has a depth image (VSD needs it), else "
+                  "mssd,mspd, said on stderr; vsd given without depth images is exit 3")
+      ->type_name("LIST")
+      ->delimiter(',')
+      ->default_str("vsd,mssd,mspd (mssd,mspd without depth images)");
+  command
+      .add_option("--vsd-delta-mm", options->vsd_delta_mm,
+                  "VSD's delta (mm), the depth tolerance of its visibility masks. Default: "
+                  "bop_toolkit's for the DATASET folder's name (itodd 5; hb, icbin, icmi, lm, "
+                  "lmo, ruapc, tless, tudl, tyol, ycbv, hope 15); another name needs it")
+      ->type_name("MM");
+  report::ByVisibilityOptions defaults;
+  command
+      .add_option("--visibility-bands", options->by_visibility.band_edges,
+                  "by visibility: band edges of bop19 visib_fract, comma-separated, from 0 to 1 "
+                  "increasing; band k is [edge k, edge k+1), the last includes 1")
+      ->type_name("LIST")
+      ->delimiter(',')
+      ->default_str(joined(defaults.band_edges));
+  command
+      .add_option("--correct", flags->correct,
+                  "by visibility: the rule 'pose correct' of the score analysis, error < "
+                  "THRESHOLD of METRIC (vsd: mean over the taus, mssd: fraction of the "
+                  "diameter, mspd: px at 640 px width); METRIC must be computed")
+      ->type_name("METRIC:THRESHOLD")
+      ->default_str(std::string(report::to_string(defaults.correct_metric)) + ":" +
+                    batch::format_shortest(defaults.correct_threshold));
+  command
+      .add_option("--min-precision", options->by_visibility.min_precision,
+                  "by visibility: the precision the recommended score threshold must reach, "
+                  "in (0, 1]")
+      ->capture_default_str();
+  command
+      .add_option("--seed", options->by_visibility.seed,
+                  "by visibility: seed of the bootstrap intervals of the correlations")
+      ->capture_default_str();
+}
+
 void add_evaluate_command(CLI::App& app, int* exit_code) {
-  auto options = std::make_shared<scene_estimation::EvaluateJobOptions>();
+  auto flags = std::make_shared<EvaluateFlags>();
   CLI::App* command = app.add_subcommand(
       "evaluate",
       "BOP 2019 pose evaluation of BOP results files (scene_id,im_id,obj_id,score,R,t,time), as "
@@ -71,59 +133,9 @@ void add_evaluate_command(CLI::App& app, int* exit_code) {
       "(columns, numbers, a rotation off by more than 2e-2 in |R^T R - I| or with det < 0, an "
       "object or image not in the dataset, times of one image more than 1 ms apart) are "
       "refused naming file, line and field.");
-  add_dataset_options(*command, &options->dataset);
-  command
-      ->add_option("--results", options->results,
-                   "BOP 2019 results CSV files; outputs are keyed by each file's name without "
-                   ".csv")
-      ->type_name("FILE")
-      ->required()
-      ->check(CLI::Validator(CLI::ExistingFile).description(""));
-  command
-      ->add_option("--errors", options->errors,
-                   "pose errors to compute, comma-separated: vsd, mssd, mspd. Default: all "
-                   "three when every target image has a depth image (VSD needs it), else "
-                   "mssd,mspd, said on stderr; vsd given without depth images is exit 3")
-      ->type_name("LIST")
-      ->delimiter(',')
-      ->default_str("vsd,mssd,mspd (mssd,mspd without depth images)");
-  command
-      ->add_option("--vsd-delta-mm", options->vsd_delta_mm,
-                   "VSD's delta (mm), the depth tolerance of its visibility masks. Default: "
-                   "bop_toolkit's for the DATASET folder's name (itodd 5; hb, icbin, icmi, lm, "
-                   "lmo, ruapc, tless, tudl, tyol, ycbv, hope 15); another name needs it")
-      ->type_name("MM");
-  report::ByVisibilityOptions defaults;
-  command
-      ->add_option("--visibility-bands", options->by_visibility.band_edges,
-                   "by visibility: band edges of bop19 visib_fract, comma-separated, from 0 to 1 "
-                   "increasing; band k is [edge k, edge k+1), the last includes 1")
-      ->type_name("LIST")
-      ->delimiter(',')
-      ->default_str(joined(defaults.band_edges));
-  auto correct = std::make_shared<std::string>();
-  command
-      ->add_option("--correct", *correct,
-                   "by visibility: the rule 'pose correct' of the score analysis, error < "
-                   "THRESHOLD of METRIC (vsd: mean over the taus, mssd: fraction of the "
-                   "diameter, mspd: px at 640 px width); METRIC must be computed")
-      ->type_name("METRIC:THRESHOLD")
-      ->default_str(std::string(report::to_string(defaults.correct_metric)) + ":" +
-                    batch::format_shortest(defaults.correct_threshold));
-  command
-      ->add_option("--min-precision", options->by_visibility.min_precision,
-                   "by visibility: the precision the recommended score threshold must reach, "
-                   "in (0, 1]")
-      ->capture_default_str();
-  command
-      ->add_option("--seed", options->by_visibility.seed,
-                   "by visibility: seed of the bootstrap intervals of the correlations")
-      ->capture_default_str();
-  command->callback([options, command, correct, exit_code] {
-    if (!correct->empty()) parse_correct_rule(*correct, &options->by_visibility);
-    // An explicit --models-dir is used as given; otherwise models_eval where it exists.
-    options->prefer_models_eval = command->get_option("--models-dir")->count() == 0;
-    *exit_code = scene_estimation::run_evaluate_job(*options).exit_code();
+  add_evaluate_options(*command, flags.get());
+  command->callback([flags, exit_code] {
+    *exit_code = scene_estimation::run_evaluate_job(flags->options()).exit_code();
   });
 }
 

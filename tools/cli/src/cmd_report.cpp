@@ -4,13 +4,18 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <clutterscope/batch/formats.hpp>
+#include <clutterscope/batch/input_digest.hpp>
 #include <clutterscope/cli/dataset_options.hpp>
+#include <clutterscope/datasets/files.hpp>
 #include <clutterscope/render/renderer_in_use.hpp>
+#include <clutterscope/report/evaluation.hpp>
 #include <clutterscope/report/report_job.hpp>
+#include <clutterscope/scene_estimation/evaluate_job.hpp>
 #include <filesystem>
 #include <iostream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -25,7 +30,7 @@ namespace {
 // validation are the step's own definition (add_visibility_options, add_estimate_options), so
 // `report --help` lists exactly what the steps take.
 struct StepOption {
-  std::string step;  // "visibility", "estimate" or "both"
+  std::string step;  // "visibility", "estimate", "both" or "evaluate"
   std::string name;  // "--mode"
   bool flag = false;
   std::string help;
@@ -85,9 +90,31 @@ const std::vector<StepOption>& step_options() {
       if (option.step == "both")
         option.help = "visibility and estimate: " + option.help.substr(option.help.find(": ") + 2);
     }
+    // The evaluate step's own options (the dataset selection and --seed are the report's).
+    EvaluateFlags evaluate;
+    CLI::App evaluate_app;
+    add_evaluate_options(evaluate_app, &evaluate);
+    for (const char* name :
+         {"--errors", "--vsd-delta-mm", "--visibility-bands", "--correct", "--min-precision"}) {
+      const CLI::Option* option = evaluate_app.get_option(name);
+      list.push_back({"evaluate", name, false,
+                      "evaluate (with --results): " + option->get_description(),
+                      option->get_type_name(), option->get_default_str()});
+    }
     return list;
   }();
   return options;
+}
+
+// evaluate's --results, as report declares it.
+const CLI::Option& evaluate_results_option() {
+  static EvaluateFlags flags;
+  static CLI::App app;
+  static const CLI::Option* option = [] {
+    add_evaluate_options(app, &flags);
+    return app.get_option("--results");
+  }();
+  return *option;
 }
 
 // --split-type, --models-dir and --targets where given, for the steps' command lines.
@@ -121,8 +148,12 @@ std::vector<std::string> step_command_line(const report::ReportJobOptions& optio
   append_dataset_layout_options(dataset, &line);
   if (dataset.keep_going) line.push_back("--keep-going");
   if (dataset.quiet) line.push_back("--quiet");
-  if (step == "estimate") {
-    append_given(options.estimate_given, &line);
+  if (step == "evaluate") {
+    append_given(options.evaluate_given, &line);
+    // The report's seed is also the seed of the evaluation's bootstrap intervals.
+    line.insert(line.end(), {"--seed", std::to_string(options.analysis.seed), "--results"});
+    line.insert(line.end(), options.results.begin(), options.results.end());
+  } else if (step == "estimate") {
     const report::ReportOptions& analysis = options.analysis;
     line.insert(line.end(), {"--variance-threshold-cm2",
                              batch::format_shortest(analysis.variance_threshold_cm2), "--seed",
@@ -172,6 +203,7 @@ class BoundSteps {
     batch::list_selected_images(dataset, options.dataset);
     visibility_fingerprint_ = visibility::visibility_job_fingerprint(visibility_);
     estimate_fingerprint_ = scene_estimation::estimate_job_fingerprint(estimate_, dataset);
+    if (!options.results.empty()) bind_evaluate(options);
   }
 
   report::ReportSteps steps() const {
@@ -179,6 +211,18 @@ class BoundSteps {
     steps.renderer = render::renderer_in_use;
     steps.visibility_options = visibility_fingerprint_;
     steps.estimate_options = estimate_fingerprint_;
+    if (evaluate_) {
+      steps.evaluate_options = evaluate_fingerprint_;
+      steps.evaluate = [this](const std::filesystem::path& out,
+                              const std::filesystem::path& bundled_results,
+                              const std::filesystem::path& images_csv) {
+        scene_estimation::EvaluateJobOptions job = *evaluate_;
+        job.dataset.out = out.string();
+        job.results.push_back(bundled_results.string());
+        job.scene_visibility_images = images_csv.string();
+        return scene_estimation::run_evaluate_job(job);
+      };
+    }
     steps.visibility = [this](const std::filesystem::path& out) {
       visibility::VisibilityJobOptions job = visibility_;
       job.dataset.out = out.string();
@@ -204,9 +248,46 @@ class BoundSteps {
   }
 
  private:
+  // The evaluate step: its options parsed as `evaluate` parses them and every check evaluate
+  // makes before it computes (the results files line by line among them), so that bad input
+  // is refused before any step runs.
+  void bind_evaluate(const report::ReportJobOptions& options) {
+    EvaluateFlags flags;
+    parse_step_flags(step_command_line(options, "evaluate"), &add_evaluate_options, &flags);
+    scene_estimation::EvaluateJobOptions evaluate = flags.options();
+    std::string why;
+    if (!evaluate.IsValid(&why)) throw batch::UsageError(why);
+    nlohmann::json results = nlohmann::json::array();
+    for (const std::string& file : evaluate.results) {
+      const std::string name = std::filesystem::path(file).stem().string();
+      if (name == report::kBundledMethod) {
+        throw batch::UsageError("--results " + file + ": " + report::kBundledMethod +
+                                " is the name of the bundled estimator's results in the report; "
+                                "give the file another name");
+      }
+      results.push_back({{"name", name},
+                         {"xxh64", batch::format_hex64(batch::xxh64(datasets::read_file(file)))}});
+    }
+    scene_estimation::check_evaluate_job(evaluate);
+    std::vector<std::string> errors = evaluate.errors;
+    std::sort(errors.begin(), errors.end());
+    const report::ByVisibilityOptions& by_visibility = evaluate.by_visibility;
+    evaluate_fingerprint_ = {
+        {"results", results},
+        {"errors", errors},
+        {"vsd_delta_mm",
+         evaluate.vsd_delta_mm ? nlohmann::json(*evaluate.vsd_delta_mm) : nlohmann::json()},
+        {"band_edges", by_visibility.band_edges},
+        {"correct_metric", report::to_string(by_visibility.correct_metric)},
+        {"correct_threshold", by_visibility.correct_threshold},
+        {"min_precision", by_visibility.min_precision}};
+    evaluate_ = std::move(evaluate);
+  }
+
   scene_estimation::EstimateJobOptions estimate_;
   visibility::VisibilityJobOptions visibility_;
-  nlohmann::json visibility_fingerprint_, estimate_fingerprint_;
+  std::optional<scene_estimation::EvaluateJobOptions> evaluate_;
+  nlohmann::json visibility_fingerprint_, estimate_fingerprint_, evaluate_fingerprint_;
 };
 
 struct ReportCommandState {
@@ -223,6 +304,15 @@ void run_report_command(CLI::App& command, ReportCommandState& state, int* exit_
     if (command.get_option(option.name)->count() == 0) continue;
     const std::string& step = option.step;
     const std::string value = option.flag ? "" : state.values[option.name];
+    if (step == "evaluate") {
+      if (options.results.empty()) {
+        throw batch::UsageError(option.name +
+                                " is an option of the evaluation, which runs with "
+                                "--results FILE.csv only");
+      }
+      options.evaluate_given[option.name] = value;
+      continue;
+    }
     if (step != "visibility") options.estimate_given[option.name] = value;
     if (step != "estimate") options.visibility_given[option.name] = value;
   }
@@ -281,6 +371,15 @@ void add_report_command(CLI::App& app, int* exit_code) {
       ->capture_default_str();
   command->add_flag("--no-notebook", state->no_notebook,
                     "do not write the Jupyter notebook clutter_report.ipynb");
+  const CLI::Option& results = evaluate_results_option();
+  command
+      ->add_option("--results", options.results,
+                   "also the BOP 2019 pose evaluation (`clutterscope evaluate`) into DIR/evaluate "
+                   "of these results files beside the bundled estimator's results_bop.csv "
+                   "(method " +
+                       std::string(report::kBundledMethod) + "): " + results.get_description())
+      ->type_name(results.get_type_name())
+      ->check(CLI::Validator(CLI::ExistingFile).description(""));
   for (const StepOption& option : step_options()) {
     if (option.flag) {
       command->add_flag(option.name, state->flags[option.name], option.help);

@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 #include <clutterscope/scene_estimation/estimate_job.hpp>
+#include <clutterscope/scene_estimation/evaluate_job.hpp>
 #include <clutterscope/visibility/visibility_job.hpp>
 #include <string>
 
@@ -35,6 +36,18 @@ struct VisibilityFlags {
 // validated exactly as the step's own command validates it.
 void add_visibility_options(CLI::App& command, VisibilityFlags* flags);
 void add_estimate_options(CLI::App& command, scene_estimation::EstimateJobOptions* options);
+
+// The flags of `evaluate`: the job's options, with --correct as typed.
+struct EvaluateFlags {
+  scene_estimation::EvaluateJobOptions job;
+  std::string correct;            // --correct METRIC:THRESHOLD; empty: the default rule
+  bool models_dir_given = false;  // --models-dir given: no models_eval preference
+  // The job's options with --correct parsed (batch::UsageError when malformed).
+  scene_estimation::EvaluateJobOptions options() const;
+};
+// Every option of `evaluate` (the dataset selection included), for `evaluate` and for the
+// evaluate step of `report --results`.
+void add_evaluate_options(CLI::App& command, EvaluateFlags* flags);
 
 void add_render_command(CLI::App& app, int* exit_code);
 void add_merge_command(CLI::App& app, int* exit_code);

@@ -87,7 +87,7 @@ std::string report_advice(const std::filesystem::path& dir, const std::string& c
 
 ReportFiles write_report(const std::filesystem::path& dir, const std::vector<ObjectRow>& objects,
                          const ReportAnalysis& analysis, const std::vector<NamedPlot>& plots,
-                         const nlohmann::ordered_json& run) {
+                         const nlohmann::ordered_json& run, const EvaluationResults* evaluation) {
   for (const NamedPlot& plot : plots) {
     if (!valid_plot_name(plot.name)) {
       throw std::invalid_argument("plot name \"" + plot.name + "\" must match [a-z0-9_-]+");
@@ -101,13 +101,14 @@ ReportFiles write_report(const std::filesystem::path& dir, const std::vector<Obj
   files.report_html = dir / "report.html";
   datasets::write_file_atomically(files.objects_csv, format_objects_csv(objects));
   datasets::write_file_atomically(files.images_csv, format_images_csv(analysis.images));
-  datasets::write_file_atomically(files.summary_json, summary_json(analysis, run).dump(2) + "\n");
+  datasets::write_file_atomically(files.summary_json,
+                                  summary_json(analysis, run, evaluation).dump(2) + "\n");
   for (const NamedPlot& plot : plots) {
     files.plots.push_back(dir / "plots" / (plot.name + ".svg"));
     datasets::write_file_atomically(files.plots.back(),
                                     "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n" + plot.svg);
   }
-  datasets::write_file_atomically(files.report_html, report_html(analysis, plots, run));
+  datasets::write_file_atomically(files.report_html, report_html(analysis, plots, run, evaluation));
   return files;
 }
 

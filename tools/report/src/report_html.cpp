@@ -1,5 +1,6 @@
 // report.html: one self-contained page (inline CSS and SVG, no script, no network).
 
+#include <clutterscope/report/evaluation.hpp>
 #include <clutterscope/report/report.hpp>
 #include <clutterscope/report/svg.hpp>
 #include <sstream>
@@ -264,7 +265,7 @@ void write_plots(std::ostringstream& out, const std::vector<NamedPlot>& plots) {
 }  // namespace
 
 std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedPlot>& plots,
-                        const Json& run) {
+                        const Json& run, const EvaluationResults* evaluation) {
   std::ostringstream out;
   write_head(out, run);
   write_summary(out, analysis);
@@ -273,6 +274,7 @@ std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedP
   write_calibration(out, analysis);
   write_variance_thresholds(out, analysis);
   write_radius_thresholds(out, analysis);
+  if (evaluation != nullptr) out << evaluation_html(*evaluation);
   write_plots(out, plots);
   return out.str();
 }

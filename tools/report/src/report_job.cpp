@@ -10,6 +10,7 @@
 #include <clutterscope/datasets/files.hpp>
 #include <clutterscope/notebooks_export/notebook.hpp>
 #include <clutterscope/report/beliefs.hpp>
+#include <clutterscope/report/evaluation.hpp>
 #include <clutterscope/report/report_job.hpp>
 #include <clutterscope/report/tables.hpp>
 #include <cmath>
@@ -17,6 +18,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <tuple>
@@ -31,15 +33,25 @@ namespace {
 // The steps run in this order; each writes DIR/STEP.
 constexpr const char* kEstimateStep = "estimate";
 constexpr const char* kVisibilityStep = "visibility";
+constexpr const char* kEvaluateStep = "evaluate";
 
 fs::path marker_path(const fs::path& dir) { return dir / ".report" / "job.json"; }
 
 // A step's batch runner writes .batch/job.json once its options were accepted.
 bool has_step_results(const fs::path& dir) {
-  for (const char* step : {"visibility", "estimate"}) {
+  for (const char* step : {"visibility", "estimate", "evaluate"}) {
     if (fs::exists(dir / step / ".batch" / "job.json")) return true;
   }
   return false;
+}
+
+// Every difference of the marker lies in the evaluate step, which has not run in DIR.
+bool differs_in_unrun_evaluate(const fs::path& dir, const nlohmann::json& patch) {
+  if (fs::exists(dir / kEvaluateStep / ".batch" / "job.json")) return false;
+  for (const nlohmann::json& operation : patch) {
+    if (operation.at("path").get<std::string>().rfind("/evaluate", 0) != 0) return false;
+  }
+  return true;
 }
 
 // A marker of an earlier version recorded the options as typed ("--particles"), not resolved.
@@ -89,7 +101,8 @@ std::vector<EstimateRow> estimates_of_visible_images(std::vector<EstimateRow> es
 // summary.json's "run": the dataset selection, every step's options as the step recorded them
 // (its summary.json, defaults included), and the analysis options. No times: the bytes must
 // not change when a finished report is re-run.
-nlohmann::ordered_json run_record(const ReportJobOptions& options, const fs::path& dir) {
+nlohmann::ordered_json run_record(const ReportJobOptions& options, const fs::path& dir,
+                                  bool evaluated) {
   nlohmann::ordered_json run;
   run["command"] = "report";
   run["tool_version"] = CLUTTERSCOPE_VERSION;
@@ -100,6 +113,11 @@ nlohmann::ordered_json run_record(const ReportJobOptions& options, const fs::pat
     run[std::string(step) + "_options"] = summary.at("options");
     // Images that failed under --keep-going are missing from the report: list them.
     failures[step] = summary.at("counts").at("failures");
+  }
+  if (evaluated) {
+    const nlohmann::json summary = datasets::read_json(dir / kEvaluateStep / "summary.json");
+    run["evaluate_options"] = summary.at("options");
+    failures[kEvaluateStep] = summary.at("counts").at("failures");
   }
   run["failed_images"] = failures;
   // The checks on the GT both steps read (rotations off orthonormal), as visibility counted.
@@ -293,6 +311,7 @@ nlohmann::json report_fingerprint(const ReportJobOptions& options, const ReportS
   fingerprint["dataset"] = dataset_fingerprint(options.dataset);
   fingerprint["visibility"] = step_options(steps.visibility_options, fingerprint["dataset"]);
   fingerprint["estimate"] = step_options(steps.estimate_options, fingerprint["dataset"]);
+  if (!steps.evaluate_options.is_null()) fingerprint["evaluate"] = steps.evaluate_options;
   return fingerprint;
 }
 
@@ -303,7 +322,8 @@ void prepare_report_folder(const fs::path& dir, const nlohmann::json& fingerprin
     const nlohmann::json stored = datasets::read_json(marker);
     const nlohmann::json patch = nlohmann::json::diff(stored, fingerprint);
     if (patch.empty()) return;
-    if (!has_step_results(dir) || !has_resolved_options(stored)) {
+    if (!has_step_results(dir) || !has_resolved_options(stored) ||
+        differs_in_unrun_evaluate(dir, patch)) {
       // No step started, or a marker of an earlier version: nothing to mix here (each step
       // still refuses a folder of another job), take it over.
       datasets::write_file_atomically(marker, fingerprint.dump(2) + "\n");
@@ -367,6 +387,19 @@ ReportRun run_report(const ReportJobOptions& options, const ReportSteps& steps) 
   }
 
   const fs::path visibility_dir = dir / kVisibilityStep;
+  std::optional<EvaluationResults> evaluation;
+  if (steps.evaluate) {
+    // The bundled estimator's results under its method name (outputs are keyed by file stem).
+    const fs::path bundled = dir / ".report" / (std::string(kBundledMethod) + ".csv");
+    datasets::write_file_atomically(
+        bundled, datasets::read_file(dir / kEstimateStep / batch::bop_results_table().file_name));
+    const StepResult step = step_run(
+        kEvaluateStep, steps.evaluate(dir / kEvaluateStep, bundled,
+                                      visibility_dir / batch::visibility_images_table().file_name));
+    run.exit_code = std::max(run.exit_code, step.exit_code);
+    run.steps.push_back(step);
+    evaluation = read_evaluation(dir / kEvaluateStep);
+  }
   const fs::path estimates_csv = dir / kEstimateStep / batch::estimates_table().file_name;
   std::vector<ObjectRow> objects =
       read_objects_csv(visibility_dir / batch::visibility_objects_table().file_name);
@@ -380,7 +413,13 @@ ReportRun run_report(const ReportJobOptions& options, const ReportSteps& steps) 
   run.exit_code = std::max(run.exit_code, beliefs.exit_code);
   run.steps.push_back(beliefs.step);
   plots.insert(plots.end(), beliefs.plots.begin(), beliefs.plots.end());
-  run.files = write_report(dir, objects, analysis, plots, run_record(options, dir));
+  if (evaluation) {
+    const std::vector<NamedPlot> evaluation_figures = evaluation_plots(*evaluation);
+    plots.insert(plots.end(), evaluation_figures.begin(), evaluation_figures.end());
+  }
+  run.files =
+      write_report(dir, objects, analysis, plots, run_record(options, dir, evaluation.has_value()),
+                   evaluation ? &*evaluation : nullptr);
   if (options.notebook) write_notebook(dir, options.analysis);
   run.console_summary = format_console_summary(analysis);
   write_run_json(dir, run.steps,
@@ -463,9 +502,8 @@ ReportNotebook write_report_notebook(const fs::path& dir,
   } catch (const notebooks_export::NotebookError& error) {
     if (error.kind() == notebooks_export::NotebookError::Kind::kMissingReport) {
       // The advice names an --out that `report` accepts (the notebook library cannot know).
-      throw datasets::DatasetError(
-          error.file(), "not found; the notebook reads a report folder: " +
-                            report_advice(dir, "notebook"));
+      throw datasets::DatasetError(error.file(), "not found; the notebook reads a report folder: " +
+                                                     report_advice(dir, "notebook"));
     }
     throw;
   }

@@ -1,5 +1,6 @@
 // summary.json of a report (schema: tools/report/report_summary.schema.json).
 
+#include <clutterscope/report/evaluation.hpp>
 #include <clutterscope/report/report.hpp>
 
 #include "report_text.hpp"
@@ -215,7 +216,8 @@ Json images_json(const std::vector<ImageSummary>& summaries) {
 
 }  // namespace
 
-nlohmann::ordered_json summary_json(const ReportAnalysis& analysis, const Json& run) {
+nlohmann::ordered_json summary_json(const ReportAnalysis& analysis, const Json& run,
+                                    const EvaluationResults* evaluation) {
   const ReportOptions& options = analysis.options;
   Json json;
   json["schema_version"] = kSummarySchemaVersion;
@@ -233,6 +235,7 @@ nlohmann::ordered_json summary_json(const ReportAnalysis& analysis, const Json& 
   json["thresholds"] = thresholds_json(analysis.thresholds, options);
   json["calibration"] = calibration_json(analysis.calibration);
   json["images"] = images_json(analysis.images);
+  if (evaluation != nullptr) json["evaluation"] = evaluation_summary_json(*evaluation);
   return json;
 }
 

@@ -29,7 +29,8 @@
 // order on the error of the correctness rule's metric), BOP's own match per threshold as
 // bop_recalled, so the `all` rows reproduce scores.json's average recalls. The scene
 // visibility (Eq. 10) is not computed: a BOP dataset does not give it, and it needs rendering
-// every GT instance (`clutterscope visibility`).
+// every GT instance (`clutterscope visibility`): it is joined from that command's images.csv
+// where EvaluateJobOptions::scene_visibility_images names one.
 
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/dataset_selection.hpp>
@@ -64,6 +65,11 @@ struct EvaluateJobOptions {
   // The analysis by visibility: bands, the correctness rule of the score analysis (its metric
   // must be computed), the precision of the recommendation, the bootstrap seed.
   report::ByVisibilityOptions by_visibility;
+  // The Eq. 10 scene visibility of each image: an images.csv of `clutterscope visibility` on
+  // the same dataset (split, scene_id, im_id, scene_visibility). Where given, the analysis by
+  // visibility is also written against it into OUT/by_scene_visibility/ (the same files, their
+  // visibility column scene_visibility). `report --results` sets it; empty: not joined.
+  std::string scene_visibility_images;
   // "--errors: unknown error 'add' ...", "results: two files named small.csv ...".
   bool IsValid(std::string* why) const;
 };
@@ -80,5 +86,10 @@ batch::BatchOutputSpec evaluate_output_spec();
 // dataset or a scene_id / im_id that is no image of the split, naming file, line and field),
 // a missing or inconsistent scene_gt_info.json, bad targets, models or GT.
 batch::BatchResult run_evaluate_job(const EvaluateJobOptions& options);
+
+// Every check run_evaluate_job makes before it computes anything (options, targets, VSD's
+// delta and depth images, the results files against the dataset), throwing what it throws, so
+// that a front end running other work first (`report --results`) refuses bad input before.
+void check_evaluate_job(const EvaluateJobOptions& options);
 
 }  // namespace clutterscope::scene_estimation

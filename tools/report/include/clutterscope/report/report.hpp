@@ -18,6 +18,8 @@
 
 namespace clutterscope::report {
 
+struct EvaluationResults;  // evaluation.hpp: the pose evaluation of `report --results`
+
 // Version of the summary.json layout; bump on any incompatible change to the schema.
 constexpr int kSummarySchemaVersion = 1;
 
@@ -109,8 +111,10 @@ std::string format_images_csv(const std::vector<ImageSummary>& images);
 
 // summary.json content. `run` is the command's record of the dataset, options and seed
 // (free-form object, written under "run").
+// `evaluation` (report --results) adds "evaluation" (evaluation_summary_json).
 nlohmann::ordered_json summary_json(const ReportAnalysis& analysis,
-                                    const nlohmann::ordered_json& run);
+                                    const nlohmann::ordered_json& run,
+                                    const EvaluationResults* evaluation = nullptr);
 
 // The five lines printed after a report: objects, median visibility, correlation with its
 // interval, recommended threshold, share accepted below the cutoff.
@@ -131,8 +135,10 @@ std::vector<NamedPlot> standard_plots(const std::vector<ObjectRow>& objects,
 
 // One self-contained HTML page (inline CSS and SVG, no script, no network): summary,
 // correlations with intervals, band table, threshold table and recommendation, plots.
+// `evaluation` (report --results) adds the section "Pose evaluation" before the plots.
 std::string report_html(const ReportAnalysis& analysis, const std::vector<NamedPlot>& plots,
-                        const nlohmann::ordered_json& run);
+                        const nlohmann::ordered_json& run,
+                        const EvaluationResults* evaluation = nullptr);
 
 struct ReportFiles {
   std::filesystem::path objects_csv, images_csv, summary_json, report_html;
@@ -143,7 +149,8 @@ struct ReportFiles {
 // (created if needed), each atomically. The bytes depend only on the inputs.
 ReportFiles write_report(const std::filesystem::path& dir, const std::vector<ObjectRow>& objects,
                          const ReportAnalysis& analysis, const std::vector<NamedPlot>& plots,
-                         const nlohmann::ordered_json& run);
+                         const nlohmann::ordered_json& run,
+                         const EvaluationResults* evaluation = nullptr);
 
 // What to run when `command` (thresholds, notebook) finds no report in `dir`: "run `clutterscope
 // report DATASET --out OUT` first, then ...", with an OUT that report accepts: the report folder

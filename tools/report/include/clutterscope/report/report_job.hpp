@@ -48,7 +48,11 @@ struct ReportJobOptions {
   // that "confident" and the random streams mean the same in DIR/estimate and in the report.
   ReportOptions analysis;
   bool notebook = true;  // also write DIR/clutter_report.ipynb
-  GivenOptions visibility_given, estimate_given;
+  // --results: BOP 2019 results files evaluated beside the bundled estimator's results_bop.csv
+  // (method kBundledMethod, evaluation.hpp) by an evaluate step into DIR/evaluate, after the
+  // estimate and visibility steps; empty: no evaluate step, the report as without it.
+  std::vector<std::string> results;
+  GivenOptions visibility_given, estimate_given, evaluate_given;
   // The analysis options and --shard.
   bool IsValid(std::string* why) const;
 };
@@ -66,6 +70,16 @@ struct ReportSteps {
   // DIR/.report/job.json: options that resolve to the same jobs are the same report.
   nlohmann::json visibility_options = nlohmann::json::object();
   nlohmann::json estimate_options = nlohmann::json::object();
+  // With --results: the evaluate job (`clutterscope evaluate` with the given options) of the
+  // results files and `bundled_results` into `out`, joining the scene visibility of
+  // `images_csv` (the visibility step's images.csv); empty without --results.
+  std::function<batch::BatchResult(const std::filesystem::path& out,
+                                   const std::filesystem::path& bundled_results,
+                                   const std::filesystem::path& images_csv)>
+      evaluate;
+  // What identifies the evaluate step before it runs (the results files' names and digests,
+  // the evaluation options), recorded in DIR/.report/job.json; null without --results.
+  nlohmann::json evaluate_options;
   // The GL renderer the steps used ("" when none rendered), for run.json's "gl_renderer".
   std::function<std::string()> renderer;
 };
@@ -80,7 +94,8 @@ struct StepRun {
 };
 
 struct ReportRun {
-  std::vector<StepRun> steps;  // estimate, visibility, beliefs (the belief figures' images)
+  // estimate, visibility, evaluate (with --results), beliefs (the belief figures' images)
+  std::vector<StepRun> steps;
   ReportFiles files;
   std::string console_summary;  // format_console_summary; for a shard, what to run next
   int exit_code = 0;            // 1 when images failed under --keep-going
@@ -88,11 +103,13 @@ struct ReportRun {
 };
 
 // The report-level fingerprint: the dataset selection and the steps' resolved options
-// (ReportSteps::visibility_options, estimate_options, without their dataset entries). No
-// --shard: the shards of a report are the same job.
+// (ReportSteps::visibility_options, estimate_options, without their dataset entries, and
+// evaluate_options where given). No --shard: the shards of a report are the same job.
 nlohmann::json report_fingerprint(const ReportJobOptions& options, const ReportSteps& steps);
 
-// Creates DIR/.report/job.json, or checks that DIR holds a report of the same job. Throws
+// Creates DIR/.report/job.json, or checks that DIR holds a report of the same job (a report
+// that differs in its evaluate step only is taken over while DIR/evaluate holds no results:
+// --results added to a finished report evaluates without redoing the other steps). Throws
 // batch::UsageError when it holds another job (naming the first difference) or when DIR may
 // not be the report's (batch::claim_output_folder: another command's results, a non-empty
 // folder that is not a report folder).
@@ -118,9 +135,10 @@ ReportNotebook write_report_notebook(const std::filesystem::path& dir,
 // notebook is DIR/clutter_report.new.ipynb", for stderr.
 std::string notebook_kept_message(const ReportNotebook& notebook);
 
-// Runs the whole report: estimate, then visibility, then the analysis, the belief figures and
-// the files. Throws batch::UsageError for invalid options or a folder of another job, and what
-// the steps throw.
+// Runs the whole report: estimate, then visibility, then (with --results) evaluate on a copy of
+// DIR/estimate/results_bop.csv named DIR/.report/clutterscope_nbp.csv (the bundled method's
+// name) and the results files, then the analysis, the belief figures and the files. Throws
+// batch::UsageError for invalid options or a folder of another job, and what the steps throw.
 ReportRun run_report(const ReportJobOptions& options, const ReportSteps& steps);
 
 // Combines report folders run with --shard I/N (each holds .report/job.json of the same job)
