@@ -1,12 +1,14 @@
 #include <gtest/gtest.h>
 
 #include <clutterscope/report/beliefs.hpp>
+#include <clutterscope/report/evaluation.hpp>
 #include <clutterscope/report/report.hpp>
 #include <clutterscope/report/svg.hpp>
 #include <map>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "report_evaluation_fixture.hpp"
 #include "report_test_tables.hpp"
 #include "requirements.hpp"
 
@@ -83,7 +85,11 @@ TEST(ReportBrowser, ChromiumLoadsReportWithoutErrorsAndEveryPlotHasASize) {
     }
     plots.push_back(belief_plot(figure, options.variance_threshold_cm2));
   }
-  const ReportFiles files = write_report(dir / "report", rows, analysis, plots, {});
+  // The pose evaluation of report --results: two methods against both visibility measures.
+  const EvaluationResults evaluation = testing::known_evaluation();
+  const std::vector<NamedPlot> evaluation_figures = evaluation_plots(evaluation);
+  plots.insert(plots.end(), evaluation_figures.begin(), evaluation_figures.end());
+  const ReportFiles files = write_report(dir / "report", rows, analysis, plots, {}, &evaluation);
 
   // 1. Load report.html as written: screenshot, and no console output or failed load.
   const std::filesystem::path screenshot = dir / "report_screenshot.png";
@@ -131,6 +137,13 @@ TEST(ReportBrowser, ChromiumLoadsReportWithoutErrorsAndEveryPlotHasASize) {
   EXPECT_TRUE(page_errors(testing::read_text(dir / "err2.txt")).empty())
       << testing::read_text(dir / "err2.txt");
   const std::string dom = testing::read_text(dir / "dom.html");
+  // Every section rendered, the evaluation's among them.
+  for (const char* id :
+       {"summary", "correlations", "bands", "calibration", "thresholds", "evaluation",
+        "evaluation-average-recalls", "evaluation-bands", "evaluation-correlation",
+        "evaluation-score", "evaluation-bands_scene", "plots"}) {
+    EXPECT_NE(dom.find("id=\"" + std::string(id) + "\""), std::string::npos) << id;
+  }
   const size_t begin = dom.find("<pre id=\"plot-sizes\">");
   ASSERT_NE(begin, std::string::npos) << dom.substr(0, 2000);
   const size_t end = dom.find("</pre>", begin);

@@ -6,6 +6,7 @@
 #include <clutterscope/report/svg.hpp>
 #include <opencv2/core.hpp>
 
+#include "report_evaluation_fixture.hpp"
 #include "report_test_tables.hpp"
 
 namespace clutterscope::report {
@@ -158,6 +159,31 @@ TEST_F(ReportHtml, SummaryValidatesAgainstTheSchema) {
   EXPECT_EQ(json["run"]["dataset"], "tray6");
   EXPECT_EQ(json["bands"].size(), 10u);
   EXPECT_EQ(json["thresholds"]["chosen"]["threshold_cm2"], 0.25);
+}
+
+// report --results: summary.json gains "evaluation", still valid; report.html gains the
+// section before the plots, and the evaluation's plots are files like the others.
+TEST_F(ReportHtml, SummaryWithTheEvaluationValidatesAgainstTheSchema) {
+  const auto rows = testing::synthetic_dataset(6);
+  ReportOptions options;
+  options.bootstrap.resamples = 200;
+  const ReportAnalysis analysis = analyse_report(rows, {}, options);
+  const EvaluationResults evaluation = testing::known_evaluation();
+  std::vector<NamedPlot> plots = standard_plots(rows, analysis);
+  const std::vector<NamedPlot> evaluation_figures = evaluation_plots(evaluation);
+  plots.insert(plots.end(), evaluation_figures.begin(), evaluation_figures.end());
+  const ReportFiles files = write_report(dir_, rows, analysis, plots, run_record(), &evaluation);
+  EXPECT_EQ(validate_summary(files.summary_json), 0) << validation_message(files.summary_json);
+  const auto json = nlohmann::json::parse(testing::read_text(files.summary_json));
+  EXPECT_EQ(json["evaluation"]["methods"], nlohmann::json({"robust", "fragile"}));
+  const std::string html = testing::read_text(files.report_html);
+  EXPECT_LT(html.find("<section id=\"evaluation\">"), html.find("<section id=\"plots\">"));
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "plots" / "evaluation_score_scene.svg"));
+  // Without the evaluation no trace of it.
+  const ReportFiles plain =
+      write_report(dir_ / "plain", rows, analysis, standard_plots(rows, analysis), run_record());
+  EXPECT_EQ(testing::read_text(plain.summary_json).find("evaluation"), std::string::npos);
+  EXPECT_EQ(testing::read_text(plain.report_html).find("id=\"evaluation\""), std::string::npos);
 }
 
 TEST_F(ReportHtml, CalibrationSectionPlotAndSummaryFollowTheNees) {
