@@ -154,6 +154,7 @@ std::vector<std::string> step_command_line(const report::ReportJobOptions& optio
     line.insert(line.end(), {"--seed", std::to_string(options.analysis.seed), "--results"});
     line.insert(line.end(), options.results.begin(), options.results.end());
   } else if (step == "estimate") {
+    append_given(options.estimate_given, &line);
     const report::ReportOptions& analysis = options.analysis;
     line.insert(line.end(), {"--variance-threshold-cm2",
                              batch::format_shortest(analysis.variance_threshold_cm2), "--seed",
