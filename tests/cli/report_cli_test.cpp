@@ -10,7 +10,9 @@
 #include <set>
 #include <string>
 
+#include "bop_fixture_support.hpp"
 #include "cli_run.hpp"
+#include "evaluate_cli_support.hpp"
 
 namespace clutterscope::cli {
 namespace {
@@ -37,6 +39,59 @@ TEST(ReportCli, TakesEveryOptionOfTheCommandsItRuns) {
       EXPECT_TRUE(report.count(name)) << "report does not take " << command << "'s " << name;
     }
   }
+  // The evaluation's options (--seed and the dataset selection are the report's own).
+  for (const char* name : {"--results", "--errors", "--vsd-delta-mm", "--visibility-bands",
+                           "--correct", "--min-precision"}) {
+    EXPECT_TRUE(report.count(name)) << "report does not take evaluate's " << name;
+  }
+}
+
+// report --results refuses bad input before any step runs (nothing in DIR but the folder's
+// claim): a bad results file is exit 3 naming file, line and field as evaluate does; a file
+// named as the bundled estimator, or an evaluation option without --results, exit 2.
+TEST(ReportCli, ResultsAreCheckedBeforeAnyStep) {
+  namespace fs = std::filesystem;
+  using clutterscope::testing::quoted;
+  using clutterscope::testing::read_text;
+  using clutterscope::testing::run_clutterscope;
+  const clutterscope::testing::ScratchDir scratch("report_results_cli");
+  const fs::path dataset = scratch.path() / "ycbv";
+  clutterscope::testing::write_evaluate_dataset(dataset);
+  const fs::path reference = clutterscope::testing::kEvaluateReference;
+  const std::string report = "report " + quoted(dataset) + " --targets " +
+                             quoted(reference / "test_targets_bop19.json") + " -q";
+  std::string small = read_text(reference / "results" / "small.csv");
+  const size_t line_2 = small.find('\n') + 1;
+  const fs::path bad = scratch.path() / "bad.csv";
+  // Line 2 names object 99, which the dataset lacks.
+  const size_t obj = small.find(',', small.find(',', line_2) + 1) + 1;
+  clutterscope::testing::write_text(
+      bad, small.substr(0, obj) + "99" + small.substr(small.find(',', obj)));
+  const auto bad_run = run_clutterscope(report + " --results " + quoted(bad) + " --out " +
+                                        quoted(scratch.path() / "bad"));
+  EXPECT_EQ(bad_run.exit_code, 3) << bad_run.errors;
+  EXPECT_NE(bad_run.errors.find(bad.string() + ": line 2, field obj_id: 99 is not an object"),
+            std::string::npos)
+      << bad_run.errors;
+  EXPECT_FALSE(fs::exists(scratch.path() / "bad" / "estimate"));
+  EXPECT_FALSE(fs::exists(scratch.path() / "bad" / "visibility"));
+
+  const fs::path bundled_name = scratch.path() / "clutterscope_nbp.csv";
+  clutterscope::testing::write_text(bundled_name, small);
+  const auto clash = run_clutterscope(report + " --results " + quoted(bundled_name) + " --out " +
+                                      quoted(scratch.path() / "clash"));
+  EXPECT_EQ(clash.exit_code, 2) << clash.errors;
+  EXPECT_NE(clash.errors.find("is the name of the bundled estimator's results"), std::string::npos)
+      << clash.errors;
+
+  const auto without =
+      run_clutterscope(report + " --errors mssd --out " + quoted(scratch.path() / "without"));
+  EXPECT_EQ(without.exit_code, 2) << without.errors;
+  EXPECT_NE(without.errors.find("--errors is an option of the evaluation, which runs with "
+                                "--results"),
+            std::string::npos)
+      << without.errors;
+  EXPECT_FALSE(fs::exists(scratch.path() / "without" / "estimate"));
 }
 
 }  // namespace

@@ -1,0 +1,103 @@
+// `clutterscope report --results` through the binary (issue 24 §3): the bundled real YCB-V
+// sample with the reference overlay of tests/scene_estimation/data/bop_eval_reference/sample_a
+// (as README's evaluate example), its small.csv beside the bundled estimator: both evaluated in
+// DIR/evaluate on the same targets, the scene visibility of the report's visibility step joined,
+// report.html, plots and summary.json showing both; a re-run reuses every step.
+
+#include <gtest/gtest.h>
+
+#include <clutterscope/render/context.hpp>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "bop_fixture_support.hpp"
+#include "cli_run.hpp"
+#include "evaluate_cli_support.hpp"
+#include "requirements.hpp"
+
+namespace clutterscope::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using clutterscope::testing::CommandRun;
+using clutterscope::testing::quoted;
+using clutterscope::testing::read_text;
+using clutterscope::testing::run_clutterscope;
+using clutterscope::testing::ScratchDir;
+using Json = nlohmann::json;
+
+const fs::path& kReference = clutterscope::testing::kEvaluateReference;
+
+TEST(ReportResultsCliGl, ComparesTheResultsFileWithTheBundledEstimatorOnTheSameTargets) {
+  std::string why;
+  if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
+  const ScratchDir scratch("report_results_cli_gl");
+  // Named ycbv: eval_bop19_pose.py's VSD delta for it is 15 mm.
+  const fs::path dataset = scratch.path() / "ycbv";
+  clutterscope::testing::write_evaluate_dataset(dataset);
+  const fs::path out = scratch.path() / "report";
+  const std::string command = "report " + quoted(dataset) + " --targets " +
+                              quoted(kReference / "test_targets_bop19.json") + " --results " +
+                              quoted(kReference / "results" / "small.csv") + " --out " +
+                              quoted(out) + " --jobs 2 -q";
+  const CommandRun run = run_clutterscope(command);
+  ASSERT_EQ(run.exit_code, 0) << run.errors;
+
+  // Both methods through the same evaluation: the results file's scores are bop_toolkit's.
+  const Json scores = Json::parse(read_text(out / "evaluate" / "scores.json"));
+  const Json expected =
+      Json::parse(read_text(kReference / "expected" / "small" / "scores_bop19.json"));
+  ASSERT_TRUE(scores.contains("small"));
+  ASSERT_TRUE(scores.contains("clutterscope_nbp"));
+  EXPECT_NEAR(scores["small"]["bop19_average_recall_mssd"].get<double>(),
+              expected["bop19_average_recall_mssd"].get<double>(), 1e-6);
+  EXPECT_NEAR(scores["small"]["bop19_average_recall"].get<double>(),
+              expected["bop19_average_recall"].get<double>(), 2e-3);
+  for (const char* key : {"bop19_average_recall_vsd", "bop19_average_recall_mssd",
+                          "bop19_average_recall_mspd", "bop19_average_recall"}) {
+    EXPECT_TRUE(scores["clutterscope_nbp"][key].is_number()) << key;
+  }
+
+  // summary.json: the numbers of the evaluate step, both measures, the same targets.
+  const Json summary = Json::parse(read_text(out / "summary.json"));
+  const Json& evaluation = summary.at("evaluation");
+  EXPECT_EQ(evaluation["methods"], Json({"small", "clutterscope_nbp"}));
+  EXPECT_EQ(evaluation["average_recalls"]["small"]["mean"],
+            scores["small"]["bop19_average_recall"]);
+  EXPECT_EQ(evaluation["average_recalls"]["clutterscope_nbp"]["mssd"],
+            scores["clutterscope_nbp"]["bop19_average_recall_mssd"]);
+  for (const char* measure : {"visib_fract", "scene_visibility"}) {
+    const Json& methods = evaluation["by_visibility"][measure]["methods"];
+    ASSERT_TRUE(methods.is_object()) << measure;
+    EXPECT_GT(methods["small"]["targets"].get<int>(), 0) << measure;
+    EXPECT_EQ(methods["small"]["targets"], methods["clutterscope_nbp"]["targets"]) << measure;
+    // Every target's image has a V^s from the visibility step.
+    EXPECT_EQ(methods["small"]["without_visibility"], 0) << measure;
+  }
+  EXPECT_EQ(summary["run"]["failed_images"]["evaluate"].size(), 0u);
+
+  const std::string html = read_text(out / "report.html");
+  for (const char* id : {"evaluation", "evaluation-average-recalls", "evaluation-bands",
+                         "evaluation-bands_scene", "evaluation-score"}) {
+    EXPECT_NE(html.find("id=\"" + std::string(id) + "\""), std::string::npos) << id;
+  }
+  EXPECT_NE(html.find("<td class=\"text\">clutterscope_nbp</td>"), std::string::npos);
+  for (const char* plot : {"evaluation_recall_bands_vsd", "evaluation_recall_curve_scene_mspd",
+                           "evaluation_score", "evaluation_score_scene"}) {
+    EXPECT_TRUE(fs::exists(out / "plots" / (std::string(plot) + ".svg"))) << plot;
+  }
+
+  // A re-run reuses every step, the evaluation too, and rewrites the same bytes.
+  const CommandRun again = run_clutterscope(command);
+  ASSERT_EQ(again.exit_code, 0) << again.errors;
+  EXPECT_EQ(read_text(out / "report.html"), html);
+  EXPECT_EQ(Json::parse(read_text(out / "summary.json")), summary);
+  const Json run_json = Json::parse(read_text(out / "run.json"));
+  EXPECT_EQ(run_json["evaluate"]["computed"], 0);
+  EXPECT_GT(run_json["evaluate"]["resumed"].get<int>(), 0);
+}
+
+}  // namespace
+}  // namespace clutterscope::cli
