@@ -165,6 +165,8 @@ json make_clutter_notebook(const NotebookOptions& options) {
 
   json cells = json::array();
   for (const detail::CellTemplate& cell : detail::cell_templates()) {
+    // The pose evaluation's cells only for a report that has one (report --results).
+    if (!options.evaluation && cell_id(cell.file_name).rfind("evaluation", 0) == 0) continue;
     json entry = {{"id", cell_id(cell.file_name)},
                   {"metadata", json::object()},
                   {"source", source_lines(render_template(cell, fields))}};
@@ -189,6 +191,7 @@ json make_clutter_notebook(const NotebookOptions& options) {
         {"visibility_cutoff", options.visibility_cutoff},
         {"accurate_cm", options.accurate_cm}}},
   };
+  if (options.evaluation) metadata["clutterscope"]["evaluation"] = true;
   return {{"cells", std::move(cells)},
           {"metadata", std::move(metadata)},
           {"nbformat", 4},

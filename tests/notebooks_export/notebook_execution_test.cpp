@@ -101,7 +101,17 @@ TEST(NotebookExecution, ValidatesAndRunsHeadlessWithEveryFigureAndTheRightNumber
   const std::filesystem::path sparse =
       write_clutter_notebook(visibility_only, NotebookOptions{}).path;
 
-  const std::vector<std::filesystem::path> notebooks = {full, looser, sparse};
+  // 4. A report with the pose evaluation of report --results (summary.json's "evaluation").
+  const std::filesystem::path evaluated_dir = root.path() / "evaluated";
+  std::filesystem::create_directories(evaluated_dir);
+  testing::write_synthetic_report(evaluated_dir);
+  const json evaluation = json::parse(testing::write_evaluation_report(evaluated_dir));
+  NotebookOptions evaluation_options;
+  evaluation_options.evaluation = true;
+  const std::filesystem::path evaluated =
+      write_clutter_notebook(evaluated_dir, evaluation_options).path;
+
+  const std::vector<std::filesystem::path> notebooks = {full, looser, sparse, evaluated};
   std::string paths;
   for (const auto& notebook : notebooks) paths += " " + shell_quote(notebook.string());
   const std::filesystem::path home = root.path() / "home";
@@ -151,6 +161,35 @@ TEST(NotebookExecution, ValidatesAndRunsHeadlessWithEveryFigureAndTheRightNumber
   expect_clean_run(executed[0], "default notebook");
   expect_clean_run(executed[1], "looser copy");
   expect_clean_run(executed[2], "visibility-only notebook");
+  expect_clean_run(executed[3], "notebook with the pose evaluation");
+  // Only a report with an evaluation has its cells.
+  for (const json& cell : executed[0]["cells"]) EXPECT_NE(cell["id"], "evaluation-tables");
+
+  // The evaluation's numbers are summary.json's, and its figure (bars and curve) is drawn.
+  const std::string tables = stream_text(cell_by_id(executed[3], "evaluation-tables"));
+  const auto value = [](const json& number) {
+    return testing::format_3g(number.is_null() ? NAN : number.get<double>());
+  };
+  for (const std::string method : {"mine", "clutterscope_nbp"}) {
+    const json& recalls = evaluation["average_recalls"][method];
+    const std::string line = "AR " + method + ": vsd " + value(recalls["vsd"]) + ", mssd " +
+                             value(recalls["mssd"]) + ", mspd " + value(recalls["mspd"]) +
+                             ", mean " + value(recalls["mean"]);
+    EXPECT_NE(tables.find(line), std::string::npos) << line << "\n" << tables;
+    const json& entry = evaluation["by_visibility"]["visib_fract"]["methods"][method];
+    const json& rho = entry["correlations"]["mssd"];
+    const std::string rho_line = "rho visib_fract " + method + " mssd: " + value(rho["spearman"]) +
+                                 " [" + value(rho["interval_low"]) + ", " +
+                                 value(rho["interval_high"]) + "] (n = 8)";
+    EXPECT_NE(tables.find(rho_line), std::string::npos) << rho_line << "\n" << tables;
+    const json& best = entry["score"]["all"];
+    const std::string score_line = "score visib_fract " + method + ": recommended s " +
+                                   value(best["lowest_score_with_min_precision"]) + ", precision " +
+                                   value(best["precision"]) + ", recall " + value(best["recall"]);
+    EXPECT_NE(tables.find(score_line), std::string::npos) << score_line << "\n" << tables;
+  }
+  EXPECT_NE(tables.find("by scene_visibility: not in this report"), std::string::npos) << tables;
+  EXPECT_EQ(png_outputs(cell_by_id(executed[3], "evaluation-plots")), 1);
 
   // The numbers, against the fixture's definitions computed in C++.
   EXPECT_NE(stream_text(cell_by_id(executed[0], "threshold-check")).find(expected_check_line(0.25)),

@@ -30,6 +30,12 @@ std::vector<FixtureObject> synthetic_objects();
 // Writes objects.csv, images.csv and summary.json (with nulls) for synthetic_objects().
 void write_synthetic_report(const std::filesystem::path& dir);
 
+// The pose evaluation of `report --results` over write_synthetic_report's folder: summary.json
+// gains "evaluation" (two methods, "mine" and the bundled "clutterscope_nbp", bands [0, 0.5)
+// and [0.5, 1] of visib_fract, an empty band's recall undefined, no scene visibility) and
+// evaluate/by_visibility_curve.csv its curve. Returns the "evaluation" entry as written.
+std::string write_evaluation_report(const std::filesystem::path& dir);
+
 // A visibility-only folder: objects.csv without estimate columns, one image whose objects are
 // all outside the image (K = 0, so V^s is undefined), no images.csv and no summary.json.
 void write_visibility_only_report(const std::filesystem::path& dir);

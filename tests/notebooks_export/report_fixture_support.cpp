@@ -109,6 +109,49 @@ void write_synthetic_report(const std::filesystem::path& dir) {
 )");
 }
 
+std::string write_evaluation_report(const std::filesystem::path& dir) {
+  // One method entry of a measure: two bands, the first without targets (recalls null).
+  const auto method = [](const char* mssd_high, const char* rho, const char* score) {
+    return std::string(R"({"targets": 8, "without_visibility": 0, "bands": [
+        {"visibility_min": 0.0, "visibility_max": 0.5, "targets": 0, "estimated": 0,
+         "average_recall": {"vsd": null, "mssd": null, "mspd": null}},
+        {"visibility_min": 0.5, "visibility_max": 1.0, "targets": 8, "estimated": 8,
+         "average_recall": {"vsd": 0.5, "mssd": )") +
+           mssd_high + R"(, "mspd": 0.25}}],
+      "correlations": {"mssd": {"spearman": )" +
+           rho + R"(, "interval_low": -0.9, "interval_high": -0.2, "n": 8}},
+      "score": {"all": {"visibility_min": 0.0, "visibility_max": 1.0,
+        "lowest_score_with_min_precision": )" +
+           score + R"(, "precision": 1.0, "recall": 0.5, "best_f1_score": 0.5, "best_f1": 0.8},
+        "bands": []}})";
+  };
+  const std::string evaluation =
+      R"({"bundled_method": "clutterscope_nbp", "methods": ["mine", "clutterscope_nbp"],
+  "files": {"scores": "evaluate/scores.json", "by_visib_fract": "evaluate/by_visibility.json",
+            "by_scene_visibility": null},
+  "average_recalls": {
+    "mine": {"vsd": 0.5, "mssd": 0.75, "mspd": 0.25, "mean": 0.5, "time_per_image_s": 0.2},
+    "clutterscope_nbp": {"vsd": 0.125, "mssd": 0.375, "mspd": 0.0625, "mean": 0.1875,
+                         "time_per_image_s": 1.5}},
+  "by_visibility": {"scene_visibility": null, "visib_fract": {
+    "band_edges": [0.0, 0.5, 1.0], "correct_metric": "mssd", "correct_threshold": 0.1,
+    "min_precision": 0.95, "methods": {"mine": )" +
+      method("0.75", "-0.6", "0.7") + R"(, "clutterscope_nbp": )" +
+      method("0.375", "null", "null") + "}}}}";
+  std::string summary = read_text(dir / "summary.json");
+  summary = summary.substr(0, summary.rfind('}')) + ",\n  \"evaluation\": " + evaluation + "\n}\n";
+  write_text(dir / "summary.json", summary);
+  std::filesystem::create_directories(dir / "evaluate");
+  write_text(dir / "evaluate" / "by_visibility_curve.csv",
+             "method,visibility,metric,centre,window_min,window_max,targets,estimated,"
+             "average_recall\n"
+             "mine,visib_fract,mssd,0.25,0.15,0.35,0,0,\n"
+             "mine,visib_fract,mssd,0.75,0.65,0.85,4,4,0.75\n"
+             "clutterscope_nbp,visib_fract,mssd,0.25,0.15,0.35,0,0,\n"
+             "clutterscope_nbp,visib_fract,mssd,0.75,0.65,0.85,4,4,0.375\n");
+  return evaluation;
+}
+
 void write_visibility_only_report(const std::filesystem::path& dir) {
   write_text(dir / "objects.csv",
              "split,scene_id,im_id,gt_id,obj_id,label,px_count_all,px_count_valid,"

@@ -474,7 +474,14 @@ batch::BatchResult merge_report_shards(const batch::MergeOptions& options) {
 }
 
 ReportNotebook write_report_notebook(const fs::path& dir,
-                                     const notebooks_export::NotebookOptions& options) {
+                                     const notebooks_export::NotebookOptions& given) {
+  // A report with a pose evaluation (report --results) gets the notebook's cells for it.
+  notebooks_export::NotebookOptions options = given;
+  const fs::path summary = dir / "summary.json";
+  if (fs::is_regular_file(summary)) {
+    const nlohmann::json json = datasets::read_json(summary);
+    options.evaluation = options.evaluation || (json.is_object() && json.contains("evaluation"));
+  }
   const std::string text =
       notebooks_export::format_notebook(notebooks_export::make_clutter_notebook(options));
   const fs::path record_path = dir / ".report" / "notebooks_written.json";

@@ -24,6 +24,9 @@ struct NotebookOptions {
   // notebook in its folder), so the report folder can be moved or shared as a whole.
   std::string report_dir = ".";
   std::string generator = "clutterscope";  // named in the first cell and the metadata
+  // The report has a pose evaluation (report --results, summary.json's "evaluation"): the
+  // notebook gets its cells (templates evaluation*), which read summary.json and evaluate/.
+  bool evaluation = false;
 
   // False with a message in *why ("visibility_cutoff must be in [0, 1], got 1.5").
   bool IsValid(std::string* why) const;

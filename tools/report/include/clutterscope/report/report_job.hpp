@@ -127,7 +127,8 @@ struct ReportNotebook {
 // what a user wrote: a notebook is replaced only when its bytes are those recorded in
 // DIR/.report/notebooks_written.json (the xxh64 digest of each notebook written) or the new
 // bytes; otherwise it is kept and the new one is clutter_report.new.ipynb (then .new-2, ...).
-// Throws datasets::DatasetError when DIR has no objects.csv.
+// With DIR/summary.json holding "evaluation" (report --results) the notebook has the pose
+// evaluation's cells. Throws datasets::DatasetError when DIR has no objects.csv.
 ReportNotebook write_report_notebook(const std::filesystem::path& dir,
                                      const notebooks_export::NotebookOptions& options);
 
