@@ -89,6 +89,10 @@ TEST(ReportResultsCliGl, ComparesTheResultsFileWithTheBundledEstimatorOnTheSameT
     EXPECT_TRUE(fs::exists(out / "plots" / (std::string(plot) + ".svg"))) << plot;
   }
 
+  // The notebook has the evaluation's cells (the notebook execution test runs them).
+  EXPECT_NE(read_text(out / "clutter_report.ipynb").find("\"id\": \"evaluation-tables\""),
+            std::string::npos);
+
   // A re-run reuses every step, the evaluation too, and rewrites the same bytes.
   const CommandRun again = run_clutterscope(command);
   ASSERT_EQ(again.exit_code, 0) << again.errors;
