@@ -92,6 +92,27 @@ TEST(ReportCli, ResultsAreCheckedBeforeAnyStep) {
             std::string::npos)
       << without.errors;
   EXPECT_FALSE(fs::exists(scratch.path() / "without" / "estimate"));
+
+  // What the evaluation needs of the dataset, checked before any step too: the targets (the
+  // dataset's own test_targets_bop19.json without --targets) and scene_gt_info.json.
+  const std::string small_csv = quoted(reference / "results" / "small.csv");
+  const auto no_targets =
+      run_clutterscope("report " + quoted(dataset) + " -q --results " + small_csv + " --out " +
+                       quoted(scratch.path() / "no_targets"));
+  EXPECT_EQ(no_targets.exit_code, 2) << no_targets.errors;
+  EXPECT_NE(no_targets.errors.find("test_targets_bop19.json does not exist; pass --targets"),
+            std::string::npos)
+      << no_targets.errors;
+  EXPECT_FALSE(fs::exists(scratch.path() / "no_targets" / "estimate"));
+  fs::remove(dataset / "test" / "000003" / "scene_gt_info.json");
+  const auto no_info = run_clutterscope(report + " --results " + small_csv + " --out " +
+                                        quoted(scratch.path() / "no_info"));
+  EXPECT_EQ(no_info.exit_code, 3) << no_info.errors;
+  EXPECT_NE(no_info.errors.find((dataset / "test" / "000003" / "scene_gt_info.json").string() +
+                                ": missing: the evaluation needs the bop19 visib_fract"),
+            std::string::npos)
+      << no_info.errors;
+  EXPECT_FALSE(fs::exists(scratch.path() / "no_info" / "estimate"));
 }
 
 }  // namespace

@@ -38,12 +38,20 @@ TEST(ReportResultsCliGl, ComparesTheResultsFileWithTheBundledEstimatorOnTheSameT
   const fs::path dataset = scratch.path() / "ycbv";
   clutterscope::testing::write_evaluate_dataset(dataset);
   const fs::path out = scratch.path() / "report";
-  const std::string command = "report " + quoted(dataset) + " --targets " +
-                              quoted(kReference / "test_targets_bop19.json") + " --results " +
-                              quoted(kReference / "results" / "small.csv") + " --out " +
-                              quoted(out) + " --jobs 2 -q";
+  const std::string plain = "report " + quoted(dataset) + " --targets " +
+                            quoted(kReference / "test_targets_bop19.json") + " --out " +
+                            quoted(out) + " --jobs 2 -q";
+  // A finished report without --results, then --results added: the evaluation runs, the
+  // estimate and visibility steps are reused.
+  const CommandRun first = run_clutterscope(plain);
+  ASSERT_EQ(first.exit_code, 0) << first.errors;
+  const std::string command = plain + " --results " + quoted(kReference / "results" / "small.csv");
   const CommandRun run = run_clutterscope(command);
   ASSERT_EQ(run.exit_code, 0) << run.errors;
+  const Json added = Json::parse(read_text(out / "run.json"));
+  EXPECT_EQ(added["estimate"]["computed"], 0);
+  EXPECT_EQ(added["visibility"]["computed"], 0);
+  EXPECT_GT(added["evaluate"]["computed"].get<int>(), 0);
 
   // Both methods through the same evaluation: the results file's scores are bop_toolkit's.
   const Json scores = Json::parse(read_text(out / "evaluate" / "scores.json"));
@@ -101,6 +109,15 @@ TEST(ReportResultsCliGl, ComparesTheResultsFileWithTheBundledEstimatorOnTheSameT
   const Json run_json = Json::parse(read_text(out / "run.json"));
   EXPECT_EQ(run_json["evaluate"]["computed"], 0);
   EXPECT_GT(run_json["evaluate"]["resumed"].get<int>(), 0);
+
+  // Once evaluated, other results files are another job: refused, nothing mixed.
+  const CommandRun other =
+      run_clutterscope(plain + " --results " + quoted(kReference / "results" / "large.csv"));
+  EXPECT_EQ(other.exit_code, 2) << other.errors;
+  EXPECT_NE(other.errors.find("holds a report of a different job (/evaluate/results"),
+            std::string::npos)
+      << other.errors;
+  EXPECT_EQ(read_text(out / "report.html"), html);
 }
 
 }  // namespace

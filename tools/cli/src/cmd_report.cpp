@@ -345,7 +345,12 @@ void add_report_command(CLI::App& app, int* exit_code) {
       "report of another dataset or other options is refused. With --shard I/N both steps run "
       "on the shard only and no report is written: run every shard (into DIR, or into separate "
       "folders combined with `clutterscope merge SHARD_DIR... --out DIR`), then the same "
-      "command without --shard into DIR reuses every image and writes the report.");
+      "command without --shard into DIR reuses every image and writes the report. With "
+      "--results FILE.csv... also the BOP 2019 pose evaluation (`clutterscope evaluate`) of "
+      "those results files and of the bundled estimator's estimate/results_bop.csv (method "
+      "clutterscope_nbp) on the same targets into DIR/evaluate, by bop19 visib_fract and by the "
+      "visibility step's scene visibility, shown side by side in report.html, plots/, "
+      "summary.json and the notebook (needs the targets and scene_gt_info.json, as evaluate).");
   add_dataset_options(*command, &options.dataset);
   report::ReportOptions& analysis = options.analysis;
   command
