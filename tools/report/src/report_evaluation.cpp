@@ -78,6 +78,12 @@ std::string value_cell(const Json& value, int decimals) {
   return "<td>" + printf_fixed(value.get<double>(), decimals) + "</td>";
 }
 
+// Scores are on any scale a method chose: three significant digits.
+std::string score_cell(const Json& value) {
+  if (!value.is_number()) return "<td class=\"na\">n/a</td>";
+  return "<td>" + general(value.get<double>()) + "</td>";
+}
+
 std::string band_text(const Json& band) {
   return printf_fixed(100 * band.at("visibility_min").get<double>(), 0) + "&ndash;" +
          printf_fixed(100 * band.at("visibility_max").get<double>(), 0) + "%";
@@ -180,10 +186,10 @@ void write_score_row(std::ostringstream& out, const std::string& method, const s
   out << "<tr><td class=\"text\">" << escape(method) << "</td><td>" << band << "</td>"
       << "<td>"
       << (score_band.at("sweep").empty() ? Json(0) : score_band.at("sweep").at(0).at("targets"))
-      << "</td>" << value_cell(lowest, 4) << value_cell(at ? at->at("precision") : Json(), 3)
+      << "</td>" << score_cell(lowest) << value_cell(at ? at->at("precision") : Json(), 3)
       << value_cell(at ? at->at("recall") : Json(), 3)
       << value_cell(at ? at->at("target_recall") : Json(), 3)
-      << value_cell(recommendation.at("best_f1_score"), 4)
+      << score_cell(recommendation.at("best_f1_score"))
       << value_cell(recommendation.at("best_f1"), 3) << "</tr>\n";
 }
 
@@ -274,10 +280,10 @@ std::vector<NamedPlot> evaluation_plots(const EvaluationResults& evaluation) {
     const std::string x_label = std::string(measure.label) + " (share 0-1)";
     for (const std::string& metric : metrics_of(analysis)) {
       svg::Chart bands = recall_chart(
-          "AR" + metric_label(metric) + " by " + measure.label + " band, methods side by side",
+          "AR " + metric_label(metric) + " by " + measure.label + " band, methods side by side",
           x_label);
       svg::Chart curve =
-          recall_chart("AR" + metric_label(metric) + " against " + measure.label, x_label);
+          recall_chart("AR " + metric_label(metric) + " against " + measure.label, x_label);
       for (int m = 0; m < methods; ++m) {
         const std::string& method = evaluation.methods[static_cast<size_t>(m)];
         const svg::Colour colour = svg::category_colour(m);
