@@ -48,6 +48,8 @@ TEST(ReportResultsCliGl, ComparesTheResultsFileWithTheBundledEstimatorOnTheSameT
   const std::string command = plain + " --results " + quoted(kReference / "results" / "small.csv");
   const CommandRun run = run_clutterscope(command);
   ASSERT_EQ(run.exit_code, 0) << run.errors;
+  EXPECT_NE(run.output.find("pose evaluation:       small AR 0.95"), std::string::npos)
+      << run.output;
   const Json added = Json::parse(read_text(out / "run.json"));
   EXPECT_EQ(added["estimate"]["computed"], 0);
   EXPECT_EQ(added["visibility"]["computed"], 0);

@@ -104,6 +104,9 @@ TEST(ReportEvaluation, SectionAndPlotsShowEveryMethodAndBothMeasures) {
                                              "evaluation_recall_curve_scene_mssd",
                                              "evaluation_score_scene"};
   EXPECT_EQ(names, expected);
+  EXPECT_EQ(format_evaluation_console(evaluation),
+            "pose evaluation:       robust AR n/a (VSD n/a, MSSD 1.000, MSPD n/a); fragile AR n/a "
+            "(VSD n/a, MSSD 0.743, MSPD n/a)\n");
   // Without a scene visibility: the visib_fract plots only, and the section says why.
   evaluation.by_scene_visibility = nullptr;
   EXPECT_EQ(evaluation_plots(evaluation).size(), 3u);

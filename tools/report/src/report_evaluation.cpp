@@ -358,6 +358,22 @@ std::string evaluation_html(const EvaluationResults& evaluation) {
   return out.str();
 }
 
+std::string format_evaluation_console(const EvaluationResults& evaluation) {
+  const auto text = [](const Json& value) {
+    return value.is_number() ? printf_fixed(value.get<double>(), 3) : std::string("n/a");
+  };
+  std::string line = "pose evaluation:       ";
+  for (size_t m = 0; m < evaluation.methods.size(); ++m) {
+    const Json& scores = evaluation.scores.at(evaluation.methods[m]);
+    line += (m > 0 ? "; " : "") + evaluation.methods[m] + " AR " +
+            text(scores.value("bop19_average_recall", Json())) + " (VSD " +
+            text(scores.value("bop19_average_recall_vsd", Json())) + ", MSSD " +
+            text(scores.value("bop19_average_recall_mssd", Json())) + ", MSPD " +
+            text(scores.value("bop19_average_recall_mspd", Json())) + ")";
+  }
+  return line + "\n";
+}
+
 nlohmann::ordered_json evaluation_summary_json(const EvaluationResults& evaluation) {
   OrderedJson json;
   json["bundled_method"] = kBundledMethod;

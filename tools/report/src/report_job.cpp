@@ -422,6 +422,7 @@ ReportRun run_report(const ReportJobOptions& options, const ReportSteps& steps) 
                    evaluation ? &*evaluation : nullptr);
   if (options.notebook) write_notebook(dir, options.analysis);
   run.console_summary = format_console_summary(analysis);
+  if (evaluation) run.console_summary += format_evaluation_console(*evaluation);
   write_run_json(dir, run.steps,
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
                  renderer());

@@ -54,6 +54,10 @@ std::vector<NamedPlot> evaluation_plots(const EvaluationResults& evaluation);
 // The report.html section "Pose evaluation" (tables; the plots are in the Plots section).
 std::string evaluation_html(const EvaluationResults& evaluation);
 
+// The line printed after the report's five-line summary: "pose evaluation:       small AR
+// 0.953 (VSD 0.926, MSSD 1.000, MSPD 0.933); clutterscope_nbp AR ..." (n/a where undefined).
+std::string format_evaluation_console(const EvaluationResults& evaluation);
+
 // summary.json's "evaluation" (schema: report_summary.schema.json): per method the average
 // recalls, and per measure the recall per band, the correlations and the recommended score
 // thresholds, all as the evaluate step's files give them.
