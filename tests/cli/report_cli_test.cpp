@@ -84,6 +84,16 @@ TEST(ReportCli, ResultsAreCheckedBeforeAnyStep) {
   EXPECT_NE(clash.errors.find("is the name of the bundled estimator's results"), std::string::npos)
       << clash.errors;
 
+  // Two files of one name: evaluate's refusal (outputs are keyed by the name).
+  const fs::path same_stem = scratch.path() / "other" / "small.csv";
+  clutterscope::testing::write_text(same_stem, small);
+  const auto twice =
+      run_clutterscope(report + " --results " + quoted(reference / "results" / "small.csv") + " " +
+                       quoted(same_stem) + " --out " + quoted(scratch.path() / "twice"));
+  EXPECT_EQ(twice.exit_code, 2) << twice.errors;
+  EXPECT_NE(twice.errors.find("--results: two files named small.csv"), std::string::npos)
+      << twice.errors;
+
   const auto without =
       run_clutterscope(report + " --errors mssd --out " + quoted(scratch.path() / "without"));
   EXPECT_EQ(without.exit_code, 2) << without.errors;
