@@ -9,8 +9,11 @@
 #include <clutterscope/render/context.hpp>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "bop_fixture_support.hpp"
 #include "cli_run.hpp"
@@ -87,6 +90,26 @@ TEST(ReportResultsCliGl, ComparesTheResultsFileWithTheBundledEstimatorOnTheSameT
     EXPECT_EQ(methods["small"]["without_visibility"], 0) << measure;
   }
   EXPECT_EQ(summary["run"]["failed_images"]["evaluate"].size(), 0u);
+  // The scene-visibility bands hold each target under its image's V^s from images.csv.
+  std::map<std::pair<int, int>, double> scene_visibility;
+  for (const auto& row : clutterscope::testing::read_csv_rows(out / "visibility" / "images.csv")) {
+    scene_visibility[{std::stoi(row.at("scene_id")), std::stoi(row.at("im_id"))}] =
+        std::stod(row.at("scene_visibility"));
+  }
+  const std::vector<double> edges = {0.0, 0.1, 0.3, 0.5, 0.7, 0.9, 1.0};
+  std::vector<int> expected_bands(edges.size() - 1, 0);
+  for (const Json& target : Json::parse(read_text(kReference / "test_targets_bop19.json"))) {
+    const double v = scene_visibility.at({target["scene_id"], target["im_id"]});
+    size_t band = 0;
+    while (band + 2 < edges.size() && v >= edges[band + 1]) ++band;
+    expected_bands[band] += target["inst_count"].get<int>();
+  }
+  const Json& scene_bands =
+      evaluation["by_visibility"]["scene_visibility"]["methods"]["small"]["bands"];
+  ASSERT_EQ(scene_bands.size(), expected_bands.size());
+  for (size_t b = 0; b < expected_bands.size(); ++b) {
+    EXPECT_EQ(scene_bands[b]["targets"], expected_bands[b]) << "band " << b;
+  }
 
   const std::string html = read_text(out / "report.html");
   for (const char* id : {"evaluation", "evaluation-average-recalls", "evaluation-bands",
