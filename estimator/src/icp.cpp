@@ -159,6 +159,13 @@ IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::V
   return result;
 }
 
+std::vector<std::size_t> converged_fits(const std::vector<IcpResult>& results) {
+  std::vector<std::size_t> converged;
+  for (std::size_t k = 0; k < results.size(); ++k)
+    if (results[k].converged) converged.push_back(k);
+  return converged;
+}
+
 FusedEstimate fuse_fits(const std::vector<Eigen::Vector3d>& fits, double variance_threshold) {
   if (fits.empty()) throw std::invalid_argument("no ICP fits to fuse");
   if (!(variance_threshold > 0) || !std::isfinite(variance_threshold))

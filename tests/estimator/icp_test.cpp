@@ -69,6 +69,37 @@ TEST(Icp, TooFewCorrespondencesIsNotConverged) {
   EXPECT_EQ(fit.position, Eigen::Vector3d::Zero());
 }
 
+// Issue 25: a fit without enough correspondences is its start point (rms 0, no information),
+// a belief sample; only converged fits are fused.
+TEST(Icp, OnlyConvergedFitsAreFused) {
+  std::mt19937_64 rng(10);
+  const Eigen::Vector3d size(0.10, 0.06, 0.04);
+  const Eigen::Vector3d truth(0.1, 0.05, 0.8);
+  Eigen::Matrix3Xd seen = box_surface(size, 200, true, rng);
+  seen.colwise() += truth;
+  const TranslationIcp icp(box_surface(size, 2000, false, rng), IcpOptions{});
+  // Fewer observed points than min_correspondences (10), right on the surface.
+  const IcpResult few = icp.align(seen.leftCols(5), truth + Eigen::Vector3d(0.002, 0, 0));
+  // Starts 20 cm off: no point within max_correspondence_distance (2 cm) of the model.
+  const IcpResult far = icp.align(seen, truth + Eigen::Vector3d(0.0, 0.0, 0.2));
+  const IcpResult good = icp.align(seen, truth + Eigen::Vector3d(0.004, -0.003, 0.002));
+  for (const IcpResult& failed : {few, far}) {
+    EXPECT_FALSE(failed.converged);
+    EXPECT_LT(failed.correspondences, IcpOptions{}.min_correspondences);
+    EXPECT_EQ(failed.rms_distance, 0.0);
+    EXPECT_EQ(failed.normal_information, Eigen::Matrix3d::Zero());
+  }
+  EXPECT_EQ(few.position, truth + Eigen::Vector3d(0.002, 0, 0));  // the start point
+  ASSERT_TRUE(good.converged);
+  const std::vector<std::size_t> kept = converged_fits({few, good, far, good});
+  EXPECT_EQ(kept, (std::vector<std::size_t>{1, 3}));
+  EXPECT_TRUE(converged_fits({few, far}).empty());
+  // Fused from the converged fits only, the estimate is the fit, with no spread.
+  const FusedEstimate fused = fuse_fits({good.position, good.position}, 2.5e-5);
+  EXPECT_LT((fused.mean - truth).norm(), 1e-3);
+  EXPECT_EQ(fused.variance, Eigen::Vector3d::Zero());
+}
+
 TEST(Icp, FuseFitsMatchesHandComputedWeights) {
   // Distances: D = (4, 3, 5) mm, sum 12; weights ∝ (8, 9, 7)/12 -> (1/3, 3/8, 7/24).
   const std::vector<Eigen::Vector3d> fits = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.001, 0, 0),

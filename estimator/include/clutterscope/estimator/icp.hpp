@@ -69,6 +69,12 @@ class TranslationIcp {
   IcpOptions options_;
 };
 
+// The indices (in order) of the results that are fits: converged ones. A result that did not
+// converge is a belief sample, not a fit, and is never fused: with too few correspondences align
+// returns its start point with rms 0 and no information; without a step below convergence_step
+// in max_iterations it is still moving.
+std::vector<std::size_t> converged_fits(const std::vector<IcpResult>& results);
+
 struct FusedEstimate {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   Eigen::Vector3d variance = Eigen::Vector3d::Zero();    // weighted, per axis (metres^2)
