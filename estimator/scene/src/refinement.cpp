@@ -3,6 +3,7 @@
 // spread), the calibrated covariance, the consistency checks and the errors against the GT.
 
 #include <algorithm>
+#include <clutterscope/batch/formats.hpp>
 #include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/estimator/confidence.hpp>
 #include <clutterscope/estimator/icp.hpp>
@@ -106,9 +107,10 @@ double free_space_share(SceneEstimator::State& s, int obj_id, const Eigen::Matri
 
 // The refined estimate of a visible object: the fused ICP fits from K belief samples, with the
 // covariance of the fits' information and the belief's spread (support frame), and how far the
-// refinement moved it out of its belief. Only converged fits are fused: a fit without enough
-// correspondences is its start point, a belief sample, not a fit. False (the failure recorded)
-// when no fit converged or a fit is not finite.
+// refinement moved it out of its belief. Results that stopped for too few correspondences are
+// not fits and are not fused (estimator::fits_to_fuse). False (the failure recorded) when no
+// result is a fit (no belief sample within icp_max_distance_m of the surface seen) or a fit is
+// not finite.
 bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
                 const estimator::GaussianMixture& belief, std::mt19937_64& rng,
                 ObjectEstimate* object, Eigen::Vector3d* mean, Eigen::Matrix3d* covariance) {
@@ -129,7 +131,7 @@ bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
   }
   std::vector<Eigen::Vector3d> fits;
   std::vector<estimator::IcpResult> fit_results;
-  for (const std::size_t k : estimator::converged_fits(results)) {
+  for (const std::size_t k : estimator::fits_to_fuse(results)) {
     // Fits in the support frame, so that covariances are in support-frame axes.
     fits.push_back(frame.camera_to_support * results[k].position);
     fit_results.push_back(results[k]);
@@ -137,8 +139,12 @@ bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
   object->icp_fits = static_cast<int>(fits.size());
   if (fits.empty()) {
     object->failure = "ICP post-processing failed: none of the " +
-                      std::to_string(starts.cols()) + " fits converged (" +
-                      std::to_string(observed.cols()) + " observed points in the box)";
+                      std::to_string(starts.cols()) + " fits found " +
+                      std::to_string(icp_options.min_correspondences) +
+                      " correspondences within " +
+                      batch::format_general(1e3 * icp_options.max_correspondence_distance, 3) +
+                      " mm (" + std::to_string(observed.cols()) +
+                      " observed points in the box): the belief is not at the surface seen";
     object->initial_error_m.reset();
     return false;
   }
