@@ -128,9 +128,9 @@ TEST_F(BenchCalibrationCliGl, TableAgreesWithTheRowsAndTheRowsWithEstimate) {
   for (std::size_t i = 0; i < rows.rows.size(); ++i) {
     const std::size_t e = estimate_row.at(rows.at(i, "scene_id") + "/" + rows.at(i, "im_id") + "/" +
                                           rows.at(i, "gt_id"));
-    for (const char* column : {"err_cm", "err_x_cm", "var_z_cm2", "cov_xy_cm2", "cov_xz_cm2",
-                               "cov_yz_cm2", "nees", "radius95_cm", "confident", "ess_min",
-                               "consistent"}) {
+    for (const char* column :
+         {"err_cm", "err_x_cm", "var_z_cm2", "cov_xy_cm2", "cov_xz_cm2", "cov_yz_cm2", "nees",
+          "radius95_cm", "confident", "ess_min", "consistent"}) {
       EXPECT_EQ(rows.at(i, column), estimates.at(e, column)) << column << " of row " << i;
     }
     EXPECT_EQ(estimates.at(e, "confident_radius"), "");  // estimate ran without a radius
@@ -142,9 +142,9 @@ TEST_F(BenchCalibrationCliGl, TableAgreesWithTheRowsAndTheRowsWithEstimate) {
     // radius95_cm = sqrt(7.8147 * the covariance's largest eigenvalue).
     const auto value = [&](const char* column) { return std::stod(rows.at(i, column)); };
     Eigen::Matrix3d covariance;
-    covariance << value("var_x_cm2"), value("cov_xy_cm2"), value("cov_xz_cm2"),
-        value("cov_xy_cm2"), value("var_y_cm2"), value("cov_yz_cm2"), value("cov_xz_cm2"),
-        value("cov_yz_cm2"), value("var_z_cm2");
+    covariance << value("var_x_cm2"), value("cov_xy_cm2"), value("cov_xz_cm2"), value("cov_xy_cm2"),
+        value("var_y_cm2"), value("cov_yz_cm2"), value("cov_xz_cm2"), value("cov_yz_cm2"),
+        value("var_z_cm2");
     const double largest =
         Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance).eigenvalues().maxCoeff();
     const double radius = std::sqrt(kChi2Quantile95 * largest);

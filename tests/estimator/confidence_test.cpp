@@ -46,10 +46,9 @@ TEST(Confidence, QuantilesInvertTheCdf) {
 // A diagonal covariance D rotated by R: S = R D R^T. In the rotated axes an error e = R u has
 // e^T S^-1 e = u^T D^-1 u = sum u_i^2 / d_i, and S's eigenvalues are D's.
 TEST(Confidence, NeesOfARotatedDiagonalCovarianceIsThatOfItsAxes) {
-  const Eigen::Matrix3d rotation =
-      (Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()) *
-       Eigen::AngleAxisd(-0.4, Eigen::Vector3d::UnitX()))
-          .toRotationMatrix();
+  const Eigen::Matrix3d rotation = (Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()) *
+                                    Eigen::AngleAxisd(-0.4, Eigen::Vector3d::UnitX()))
+                                       .toRotationMatrix();
   const Eigen::Vector3d d(0.04, 0.25, 1.5);  // cm^2
   const Eigen::Matrix3d covariance = rotation * d.asDiagonal() * rotation.transpose();
   for (const Eigen::Vector3d& u :

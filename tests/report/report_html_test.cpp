@@ -172,7 +172,8 @@ TEST_F(ReportHtml, CalibrationSectionPlotAndSummaryFollowTheNees) {
     if (nees[i] >= 0) row.estimate->nees = nees[i];
     row.estimate->ess_min = 1.0 + i;
     // The last five with the covariance columns (zero correlations), the first five without.
-    if (i >= 5) row.estimate->cov_xy_cm2 = row.estimate->cov_xz_cm2 = row.estimate->cov_yz_cm2 = 0.0;
+    if (i >= 5)
+      row.estimate->cov_xy_cm2 = row.estimate->cov_xz_cm2 = row.estimate->cov_yz_cm2 = 0.0;
     rows.push_back(row);
   }
   rows.push_back(testing::unestimated(1.0, 0, 10));

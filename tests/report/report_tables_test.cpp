@@ -1,10 +1,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cmath>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/report/report.hpp>
 #include <clutterscope/report/tables.hpp>
+#include <cmath>
 #include <optional>
 
 #include "report_test_tables.hpp"
@@ -178,14 +178,14 @@ TEST_F(ReportTables, CovarianceColumnsAllOrNoneAndPositiveSemiDefinite) {
   const std::string partial =
       message_of(header + "cov_xy_cm2,confident,err_cm\ntest,1,0,0,3,1,2,700,1,1,1,0.5,0,1\n");
   EXPECT_NE(partial.find("line 2, column cov_xz_cm2"), std::string::npos) << partial;
-  const std::string empty_field =
-      message_of(header + "cov_xy_cm2,cov_xz_cm2,cov_yz_cm2,confident,err_cm\n"
-                          "test,1,0,0,3,1,2,700,1,1,1,0.5,,0,0,1\n");
+  const std::string empty_field = message_of(header +
+                                             "cov_xy_cm2,cov_xz_cm2,cov_yz_cm2,confident,err_cm\n"
+                                             "test,1,0,0,3,1,2,700,1,1,1,0.5,,0,0,1\n");
   EXPECT_NE(empty_field.find("column cov_xz_cm2"), std::string::npos) << empty_field;
   // |cov_xy| > sqrt(var_x var_y): eigenvalue 1 - 2 < 0.
-  const std::string indefinite =
-      message_of(header + "cov_xy_cm2,cov_xz_cm2,cov_yz_cm2,confident,err_cm\n"
-                          "test,1,0,0,3,1,2,700,1,1,1,2,0,0,0,1\n");
+  const std::string indefinite = message_of(header +
+                                            "cov_xy_cm2,cov_xz_cm2,cov_yz_cm2,confident,err_cm\n"
+                                            "test,1,0,0,3,1,2,700,1,1,1,2,0,0,0,1\n");
   EXPECT_NE(indefinite.find("not positive semi-definite"), std::string::npos) << indefinite;
 }
 

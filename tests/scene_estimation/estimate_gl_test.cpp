@@ -283,9 +283,9 @@ TEST_F(EstimateGl, ConfidenceRadiusDecidesFromThe95PercentEllipsoid) {
     // least the largest axis variance (issue 25).
     const auto value = [&](const char* name) { return std::stod(row[column.at(name)]); };
     Eigen::Matrix3d covariance;
-    covariance << value("var_x_cm2"), value("cov_xy_cm2"), value("cov_xz_cm2"),
-        value("cov_xy_cm2"), value("var_y_cm2"), value("cov_yz_cm2"), value("cov_xz_cm2"),
-        value("cov_yz_cm2"), value("var_z_cm2");
+    covariance << value("var_x_cm2"), value("cov_xy_cm2"), value("cov_xz_cm2"), value("cov_xy_cm2"),
+        value("var_y_cm2"), value("cov_yz_cm2"), value("cov_xz_cm2"), value("cov_yz_cm2"),
+        value("var_z_cm2");
     const Eigen::Vector3d eigenvalues =
         Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance).eigenvalues();
     EXPECT_GE(eigenvalues.minCoeff(), -1e-5 * eigenvalues.maxCoeff()) << "row " << r;

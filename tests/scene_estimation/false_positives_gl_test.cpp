@@ -67,8 +67,9 @@ TEST(FalsePositivesGl, NoConfidentEstimateIsAttachedToAFalsePositive) {
       std::vector<std::string> f;
       std::istringstream cells(line);
       for (std::string cell; std::getline(cells, cell, ',');) f.push_back(cell);
-      truth[{std::stoi(f[1]), std::stoi(f[2])}].emplace_back(
-          std::stoi(f[4]), rect_of(f[10], f[11], f[12], f[13]), rect_of(f[14], f[15], f[16], f[17]));
+      truth[{std::stoi(f[1]), std::stoi(f[2])}].emplace_back(std::stoi(f[4]),
+                                                             rect_of(f[10], f[11], f[12], f[13]),
+                                                             rect_of(f[14], f[15], f[16], f[17]));
     }
   }
 
@@ -107,9 +108,9 @@ TEST(FalsePositivesGl, NoConfidentEstimateIsAttachedToAFalsePositive) {
       const cv::Rect observed(object.observation->x, object.observation->y,
                               object.observation->width, object.observation->height);
       for (const cv::Rect& false_box : false_boxes) {
-        EXPECT_NE(observed, false_box) << "scene " << key.scene_id << ", gt " << object.gt_id
-                                       << ": confident on a false positive, "
-                                       << 100 * *object.error_m << " cm off";
+        EXPECT_NE(observed, false_box)
+            << "scene " << key.scene_id << ", gt " << object.gt_id
+            << ": confident on a false positive, " << 100 * *object.error_m << " cm off";
       }
     }
   }

@@ -9,8 +9,7 @@ double box_iou(const cv::Rect& a, const cv::Rect& b) {
   return uni > 0 ? inter / uni : 0.0;
 }
 
-int best_overlapping(const cv::Rect& box, const std::vector<cv::Rect>& candidates,
-                     double min_iou) {
+int best_overlapping(const cv::Rect& box, const std::vector<cv::Rect>& candidates, double min_iou) {
   int best = -1;
   double best_iou = 0.0;
   for (int i = 0; i < static_cast<int>(candidates.size()); ++i) {

@@ -374,8 +374,7 @@ nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
   fingerprint["variance_threshold_cm2"] = e.variance_threshold_cm2;
   if (e.confidence_radius_cm) fingerprint["confidence_radius_cm"] = *e.confidence_radius_cm;
   fingerprint["seed"] = e.seed;
-  const bool synthetic =
-      options.detections.empty() || options.detections == kSyntheticDetections;
+  const bool synthetic = options.detections.empty() || options.detections == kSyntheticDetections;
   fingerprint["detections"] = synthetic ? "" : fs::absolute(options.detections).string();
   fingerprint["save_beliefs"] = options.save_beliefs;
   fingerprint["no_time"] = options.no_time;

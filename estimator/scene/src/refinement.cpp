@@ -138,9 +138,8 @@ bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
   }
   object->icp_fits = static_cast<int>(fits.size());
   if (fits.empty()) {
-    object->failure = "ICP post-processing failed: none of the " +
-                      std::to_string(starts.cols()) + " fits found " +
-                      std::to_string(icp_options.min_correspondences) +
+    object->failure = "ICP post-processing failed: none of the " + std::to_string(starts.cols()) +
+                      " fits found " + std::to_string(icp_options.min_correspondences) +
                       " correspondences within " +
                       batch::format_general(1e3 * icp_options.max_correspondence_distance, 3) +
                       " mm (" + std::to_string(observed.cols()) +

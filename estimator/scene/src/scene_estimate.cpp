@@ -204,8 +204,8 @@ bool check_memory_bounds(const EstimateOptions& options, std::uint64_t memory_by
 }
 
 bool confident_at_radius(const ObjectEstimate& object, double radius_cm) {
-  return estimator::confident_within_radius(
-             1e4 * estimator::largest_eigenvalue(object.covariance), radius_cm) &&
+  return estimator::confident_within_radius(1e4 * estimator::largest_eigenvalue(object.covariance),
+                                            radius_cm) &&
          object.consistent;
 }
 

@@ -243,7 +243,8 @@ void write_radius_thresholds(std::ostringstream& out, const ReportAnalysis& anal
     out << "none</strong> (" << html_escape(radius_rec.largest_with_min_precision.undefined_reason)
         << ")";
   }
-  out << ".</p>\n<table>\n<tr><th>radius R (cm)</th><th>equivalent &lambda;<sub>max</sub> threshold (cm&sup2;)</th>"
+  out << ".</p>\n<table>\n<tr><th>radius R (cm)</th><th>equivalent &lambda;<sub>max</sub> "
+         "threshold (cm&sup2;)</th>"
       << "<th>accepted</th><th>precision</th><th>recall</th><th>F1</th><th>accepted below "
       << printf_fixed(100 * options.visibility_cutoff, 0) << "%</th></tr>\n";
   for (const RadiusRow& radius : t.radius_sweep) {

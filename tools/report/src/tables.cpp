@@ -244,10 +244,10 @@ std::string format_objects_csv(const std::vector<ObjectRow>& objects) {
           << batch::format_shortest(e.var_y_cm2) << ',' << batch::format_shortest(e.var_z_cm2)
           << ',' << optional(e.cov_xy_cm2) << ',' << optional(e.cov_xz_cm2) << ','
           << optional(e.cov_yz_cm2) << ',' << batch::format_shortest(e.max_variance_cm2()) << ','
-          << (e.confident ? 1 : 0)
-          << ',' << optional(e.err_cm) << ',' << optional(e.init_err_cm) << ','
-          << optional(e.err_x_cm) << ',' << optional(e.err_y_cm) << ',' << optional(e.err_z_cm)
-          << ',' << optional(e.nees) << ',' << batch::format_shortest(e.radius95_cm()) << ','
+          << (e.confident ? 1 : 0) << ',' << optional(e.err_cm) << ',' << optional(e.init_err_cm)
+          << ',' << optional(e.err_x_cm) << ',' << optional(e.err_y_cm) << ','
+          << optional(e.err_z_cm) << ',' << optional(e.nees) << ','
+          << batch::format_shortest(e.radius95_cm()) << ','
           << (e.confident_radius ? (*e.confident_radius ? "1" : "0") : "") << ','
           << optional(e.ess_min) << ',' << optional(e.time_ms) << ',' << (e.consistent ? 1 : 0);
     } else {

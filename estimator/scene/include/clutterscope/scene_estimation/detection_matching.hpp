@@ -25,7 +25,6 @@ double box_iou(const cv::Rect& a, const cv::Rect& b);
 // The index of the candidate with the largest IoU with `box` (the first on ties), or -1 when
 // that IoU is below min_iou or 0 (IoU 0 never matches, whatever min_iou). Empty candidates
 // (objects of another class, fixed ones) never match.
-int best_overlapping(const cv::Rect& box, const std::vector<cv::Rect>& candidates,
-                     double min_iou);
+int best_overlapping(const cv::Rect& box, const std::vector<cv::Rect>& candidates, double min_iou);
 
 }  // namespace clutterscope::scene_estimation
