@@ -35,7 +35,7 @@ TEST(DetectionMatching, TheLargestOverlapAtLeastTheMinimumMatches) {
 // with the smallest minimum (before issue 25 the best of the zero overlaps was taken).
 TEST(DetectionMatching, ZeroOverlapNeverMatches) {
   const std::vector<cv::Rect> objects = {{0, 0, 10, 10}, {50, 50, 10, 10}};
-  EXPECT_EQ(best_overlapping({20, 20, 10, 10}, objects, 1e-12), -1);
+  EXPECT_EQ(best_overlapping({20, 20, 10, 10}, objects, 0.0), -1);
   EXPECT_EQ(best_overlapping({20, 20, 10, 10}, objects, kDefaultMinDetectionIou), -1);
   EXPECT_EQ(best_overlapping({20, 20, 10, 10}, {}, 0.05), -1);
   EXPECT_EQ(best_overlapping({20, 20, 10, 10}, {{}, {}}, 0.05), -1);  // other classes only

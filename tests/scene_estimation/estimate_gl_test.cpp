@@ -207,11 +207,11 @@ TEST_F(EstimateGl, JobsOneAndTwoGiveByteIdenticalOutputs) {
     EXPECT_EQ(read_file(one / file), read_file(two / file)) << file;
   const auto rows = read_csv(one / "estimates.csv");
   ASSERT_GE(rows.size(), 2u);
-  EXPECT_EQ(rows[0].size(), 26u);
+  EXPECT_EQ(rows[0].size(), 29u);
   EXPECT_EQ(read_file(one / "estimates.csv").find("nan"), std::string::npos);
   int estimated = 0;
   for (std::size_t r = 1; r < rows.size(); ++r) {
-    ASSERT_EQ(rows[r].size(), 26u) << r;
+    ASSERT_EQ(rows[r].size(), 29u) << r;
     if (!rows[r][6].empty()) ++estimated;
   }
   EXPECT_GE(estimated, 6);
@@ -457,7 +457,7 @@ TEST_F(EstimateGl, BadInputIsRecordedPerObjectWithoutNaN) {
       << summary.at("image_failures").dump();
   // Every object of image (0, 0) failed: its rows have empty numeric fields.
   for (const auto& row : read_csv(out / "estimates.csv")) {
-    EXPECT_EQ(row.size(), 26u) << "every row has the 26 columns of the header";
+    EXPECT_EQ(row.size(), 29u) << "every row has the 29 columns of the header";
     if (row[1] == "0" && row[2] == "0") {
       EXPECT_TRUE(row[6].empty());
       EXPECT_TRUE(row[9].empty());

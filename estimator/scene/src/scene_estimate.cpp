@@ -67,8 +67,8 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (iterations < 1) return fail("--iterations must be >= 1");
   if (gibbs_sweeps < 1) return fail("--gibbs-sweeps must be >= 1");
   if (icp_samples < 1) return fail("--icp-samples must be >= 1");
-  if (!(min_detection_iou > 0 && min_detection_iou <= 1))
-    return fail("--min-detection-iou must be in (0, 1], got " + std::to_string(min_detection_iou));
+  if (!(min_detection_iou >= 0 && min_detection_iou <= 1))
+    return fail("--min-detection-iou must be in [0, 1], got " + std::to_string(min_detection_iou));
   if (!(variance_threshold_cm2 > 0) || !std::isfinite(variance_threshold_cm2))
     return fail("--variance-threshold-cm2 must be a finite number > 0 (the paper uses 0.25)");
   if (confidence_radius_cm &&

@@ -136,8 +136,9 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
   command
       .add_option("--min-detection-iou", e.min_detection_iou,
                   "a detection box is an object's only if it overlaps the object's projected "
-                  "model bounds by at least this IoU, in (0, 1] (IoU 0 never matches); other "
-                  "boxes are unmatched (summary.json: unmatched_detections per image) and unused")
+                  "model bounds, with at least this IoU, in [0, 1] (IoU 0 never matches: 0 means "
+                  "any overlap); other boxes are unmatched (summary.json: unmatched_detections "
+                  "per image) and unused")
       ->capture_default_str();
 }
 

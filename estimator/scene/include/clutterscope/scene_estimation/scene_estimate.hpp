@@ -119,9 +119,9 @@ struct EstimateOptions {
   // The synthetic detector (no attached detections): boxes of the visible pixels, and the
   // amodal box of every completely hidden object (DetectorOptions::amodal_boxes).
   datasets::DetectorOptions detector;
-  // A detection is an object's only if its box overlaps the object's projected model bounds by
-  // at least this IoU (in (0, 1]; IoU 0 never matches); other boxes are unmatched, counted per
-  // image (ViewEstimate::unmatched_detections) and not used (--min-detection-iou).
+  // A detection is an object's only if its box overlaps the object's projected model bounds,
+  // with an IoU of at least this (in [0, 1]; IoU 0 never matches); other boxes are unmatched,
+  // counted per image (ViewEstimate::unmatched_detections) and not used (--min-detection-iou).
   double min_detection_iou = kDefaultMinDetectionIou;
   // Attached detections do not say which boxes are amodal: with a value, an object whose every
   // box scores below it is estimated as hidden, like one with the synthetic detector's amodal
