@@ -148,6 +148,7 @@ class EstimateWorker {
       return entry;
     }
     entry["confident"] = object.confident;
+    if (!object.amodal && object.icp_fits == 0) entry["without_fit"] = true;
     entry["err_cm"] = batch::json_rounded(100 * *object.error_m, 4);
     entry["max_var_cm2"] = batch::json_rounded(1e4 * object.variance.maxCoeff(), 6);
     // Calibration (summary.json): a non-finite NEES (a zero variance) is left out.
@@ -222,6 +223,7 @@ class EstimateSummary : public batch::SummaryBuilder {
         continue;
       }
       ++estimated_;
+      without_fit_ += object.value("without_fit", false);
       const double err = object.at("err_cm").get<double>();
       const double variance = object.at("max_var_cm2").get<double>();
       const bool confident = object.at("confident").get<bool>();
@@ -266,6 +268,8 @@ class EstimateSummary : public batch::SummaryBuilder {
     summary["counts"]["estimated"] = estimated_;
     summary["counts"]["confident"] = confident_errors_.size();
     summary["counts"]["unmatched_detections"] = unmatched_total_;
+    // Visible objects no ICP result fitted: estimated from the belief alone, as hidden ones.
+    summary["counts"]["estimated_without_fit"] = without_fit_;
     double sum = 0;
     for (double e : confident_errors_) sum += e;
     double all = 0;
@@ -324,6 +328,7 @@ class EstimateSummary : public batch::SummaryBuilder {
   nlohmann::json fingerprint_;
   batch::InputCheckTotals input_checks_;
   long images_ = 0, graphs_inferred_ = 0, objects_ = 0, estimated_ = 0, unmatched_total_ = 0;
+  long without_fit_ = 0;
   long synthetic_observations_ = 0, synthetic_detections_ = 0;
   long confident_over_2cm_ = 0, high_visibility_ = 0, high_visibility_confident_ = 0;
   std::vector<double> errors_, confident_errors_, low_variances_, high_variances_, ess_;

@@ -3,7 +3,6 @@
 // spread), the calibrated covariance, the consistency checks and the errors against the GT.
 
 #include <algorithm>
-#include <clutterscope/batch/formats.hpp>
 #include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/estimator/confidence.hpp>
 #include <clutterscope/estimator/icp.hpp>
@@ -108,9 +107,9 @@ double free_space_share(SceneEstimator::State& s, int obj_id, const Eigen::Matri
 // The refined estimate of a visible object: the fused ICP fits from K belief samples, with the
 // covariance of the fits' information and the belief's spread (support frame), and how far the
 // refinement moved it out of its belief. Results that stopped for too few correspondences are
-// not fits and are not fused (estimator::fits_to_fuse). False (the failure recorded) when no
-// result is a fit (no belief sample within icp_max_distance_m of the surface seen) or a fit is
-// not finite.
+// not fits and are not fused (estimator::fits_to_fuse). False when no result is a fit
+// (object->icp_fits 0: no belief sample within icp_max_distance_m of enough surface seen), and
+// with the failure recorded when a fit is not finite.
 bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
                 const estimator::GaussianMixture& belief, std::mt19937_64& rng,
                 ObjectEstimate* object, Eigen::Vector3d* mean, Eigen::Matrix3d* covariance) {
@@ -137,16 +136,7 @@ bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
     fit_results.push_back(results[k]);
   }
   object->icp_fits = static_cast<int>(fits.size());
-  if (fits.empty()) {
-    object->failure = "ICP post-processing failed: none of the " + std::to_string(starts.cols()) +
-                      " fits found " + std::to_string(icp_options.min_correspondences) +
-                      " correspondences within " +
-                      batch::format_general(1e3 * icp_options.max_correspondence_distance, 3) +
-                      " mm (" + std::to_string(observed.cols()) +
-                      " observed points in the box): the belief is not at the surface seen";
-    object->initial_error_m.reset();
-    return false;
-  }
+  if (fits.empty()) return false;
   estimator::FusedEstimate fused;
   try {
     fused = estimator::fuse_fits(fits, threshold_m2);
@@ -231,7 +221,12 @@ void refine_and_fuse(SceneEstimator::State& s, const SceneFrame& frame, const Sc
       mean = estimator::mixture_mean(belief);
       covariance = estimator::mixture_covariance(belief);
     } else if (!fit_by_icp(s, frame, belief, rng, &object, &mean, &covariance)) {
-      continue;
+      if (!object.failure.empty()) continue;
+      // Nothing was fitted (too few observed points near any belief sample, e.g. a sliver of a
+      // few pixels): as for a hidden object, the belief's mean and spread, never the start
+      // points fused as if they were fits.
+      mean = estimator::mixture_mean(belief);
+      covariance = estimator::mixture_covariance(belief);
     }
     // Isotropic, so the same in the support frame.
     covariance += estimator::model_misfit_covariance(s.misfit.translation_m,

@@ -186,7 +186,9 @@ struct ObjectEstimate {
   // ICP-refined estimates: the squared Mahalanobis distance of the refined mean from the final
   // belief's mean under the sum of both covariances (chi-square, 3 dof, when they agree).
   std::optional<double> belief_shift;
-  // ICP-refined estimates: how many of the K results were fits (estimator::fits_to_fuse).
+  // Visible objects: how many of the K ICP results were fits (estimator::fits_to_fuse). With
+  // none (too few observed points near any belief sample) the estimate is the belief's mean and
+  // spread, as for a hidden object (summary.json: estimated_without_fit).
   int icp_fits = 0;
   // Both checks passed (always for hidden objects, which have neither); `confident` needs it.
   bool consistent = true;
