@@ -133,13 +133,20 @@ std::vector<Detection> detect(const cv::Mat& labels, const std::vector<DetectorI
       if (!amodal[i]) detections.push_back(duplicate);
     }
   }
-  if (options.false_positives_per_image > 0 && !category_ids.empty()) {
+  std::vector<int> false_positive_ids = category_ids;
+  if (options.false_positives_of_scene_classes) {
+    std::vector<int> present;
+    for (const DetectorInstance& instance : instances)
+      if (!instance.fixed) present.push_back(instance.obj_id);
+    if (!present.empty()) false_positive_ids = present;
+  }
+  if (options.false_positives_per_image > 0 && !false_positive_ids.empty()) {
+    const std::vector<int>& ids = false_positive_ids;
     const int false_positives =
         std::poisson_distribution<int>(options.false_positives_per_image)(rng);
     for (int k = 0; k < false_positives; ++k) {
       Detection detection;
-      detection.obj_id = category_ids[static_cast<std::size_t>(unit(rng) * category_ids.size()) %
-                                      category_ids.size()];
+      detection.obj_id = ids[static_cast<std::size_t>(unit(rng) * ids.size()) % ids.size()];
       detection.score = round_to(0.05 + 0.25 * unit(rng), 1e-4);
       const double w = (0.05 + 0.15 * unit(rng)) * labels.cols;
       const double h = (0.05 + 0.15 * unit(rng)) * labels.rows;

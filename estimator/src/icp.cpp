@@ -145,6 +145,7 @@ IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::V
     result.correspondences = count;
     if (count < options_.min_correspondences) {
       result.converged = false;
+      result.too_few_correspondences = true;
       return result;
     }
     result.rms_distance = std::sqrt(squared_sum / count);
@@ -157,6 +158,13 @@ IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::V
     }
   }
   return result;
+}
+
+std::vector<std::size_t> fits_to_fuse(const std::vector<IcpResult>& results) {
+  std::vector<std::size_t> fits;
+  for (std::size_t k = 0; k < results.size(); ++k)
+    if (!results[k].too_few_correspondences) fits.push_back(k);
+  return fits;
 }
 
 FusedEstimate fuse_fits(const std::vector<Eigen::Vector3d>& fits, double variance_threshold) {

@@ -10,11 +10,14 @@ from IPython.display import display
 
 report_dir = Path(REPORT_DIR)
 VARIANCE_COLUMNS = ["var_x_cm2", "var_y_cm2", "var_z_cm2"]
-# Calibration columns (err_* per support-frame axis, nees, radius95_cm) are absent from reports
-# of earlier versions; an empty or infinite nees (a zero variance) reads as NaN.
+# The covariance's off-diagonal entries (cov_xy_cm2, cov_xz_cm2, cov_yz_cm2) and the calibration
+# columns (err_* per support-frame axis, nees = e^T S^-1 e, radius95_cm from the largest
+# eigenvalue) are absent from reports of earlier versions, whose covariance was diagonal; an
+# empty or infinite nees (a singular covariance) reads as NaN.
+COVARIANCE_COLUMNS = ["cov_xy_cm2", "cov_xz_cm2", "cov_yz_cm2"]
 NUMERIC_COLUMNS = ["px_count_all", "px_count_valid", "px_count_visib", "visib_fract",
-                   *VARIANCE_COLUMNS, "err_cm", "err_x_cm", "err_y_cm", "err_z_cm", "nees",
-                   "radius95_cm"]
+                   *VARIANCE_COLUMNS, *COVARIANCE_COLUMNS, "err_cm", "err_x_cm", "err_y_cm",
+                   "err_z_cm", "nees", "radius95_cm"]
 
 
 def fmt(value, spec=".3g"):

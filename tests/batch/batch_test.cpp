@@ -312,6 +312,36 @@ TEST(Batch, MergeRefusesACommandNotListed) {
   }
 }
 
+// A folder of an earlier version (its options lack what this version's output requires, e.g.
+// estimate's "covariance": "full") holds rows of other columns: merge refuses it, naming the
+// option, instead of writing those rows under this version's header.
+TEST(Batch, MergeRefusesAFolderWithoutTheRequiredOptions) {
+  FakeJobOptions fake;
+  fake.scenes = 1;
+  fake.images_per_scene = 2;
+  const fs::path old = fresh_dir("required_old");
+  run_batch(fake_job(old, fake), options_for(old, 1));
+  BatchOutputSpec newer = testing::fake_output();
+  newer.required_options = {{"covariance", "full"}};
+  MergeOptions merge;
+  merge.inputs = {old};
+  merge.out_dir = fresh_dir("required_out");
+  merge.outputs = {newer};
+  merge.quiet = true;
+  try {
+    merge_batches(merge);
+    FAIL() << "a folder without the required options must be refused";
+  } catch (const UsageError& error) {
+    EXPECT_NE(std::string(error.what()).find("lack covariance = \"full\""), std::string::npos)
+        << error.what();
+  }
+  EXPECT_FALSE(fs::exists(merge.out_dir / "a.csv"));
+  // With the option recorded (the fake job's "option"), the same merge works.
+  newer.required_options = {{"option", fake.option}};
+  merge.outputs = {newer};
+  EXPECT_EQ(merge_batches(merge).exit_code(), 0);
+}
+
 TEST(Batch, ShardsSharingOneFolderFinalizeWhenComplete) {
   FakeJobOptions fake;
   fake.scenes = 2;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 
 namespace clutterscope::datasets {
 namespace {
@@ -73,6 +74,30 @@ TEST(Detector, DuplicatesAndFalsePositivesAtTheConfiguredRates) {
   // 2 true + 2 duplicates + Poisson(2) false positives per image.
   const double mean = static_cast<double>(total) / images;
   EXPECT_NEAR(mean, 6.0, 5 * std::sqrt(2.0 / images));
+}
+
+// --false-positive-classes scene: every false positive takes the class of one of the image's
+// non-fixed instances (1, 2, 3; never the fixed 16 nor the other categories 7, 8), so that it
+// competes with a true detection of its class.
+TEST(Detector, FalsePositivesOfTheSceneClasses) {
+  DetectorOptions options;
+  options.false_positives_per_image = 3.0;
+  options.false_positives_of_scene_classes = true;
+  std::mt19937_64 rng(6);
+  std::set<int> classes;
+  for (int i = 0; i < 300; ++i) {
+    const auto detections = detect(label_image(), instances(), {1, 2, 3, 7, 8}, options, rng);
+    for (std::size_t d = 2; d < detections.size(); ++d) classes.insert(detections[d].obj_id);
+  }
+  EXPECT_EQ(classes, (std::set<int>{1, 2, 3}));
+  // Any class (the default): the categories given.
+  options.false_positives_of_scene_classes = false;
+  classes.clear();
+  for (int i = 0; i < 300; ++i) {
+    const auto detections = detect(label_image(), instances(), {7, 8}, options, rng);
+    for (std::size_t d = 2; d < detections.size(); ++d) classes.insert(detections[d].obj_id);
+  }
+  EXPECT_EQ(classes, (std::set<int>{7, 8}));
 }
 
 // The instances above with their unoccluded silhouette boxes (cv::Rect, width = xmax - xmin + 1):

@@ -69,6 +69,42 @@ TEST(Icp, TooFewCorrespondencesIsNotConverged) {
   EXPECT_EQ(fit.position, Eigen::Vector3d::Zero());
 }
 
+// Issue 25: a result without enough correspondences is its start point (rms 0, no information),
+// a belief sample, and is never fused; one stopped by the iteration limit is a fit.
+TEST(Icp, ResultsWithTooFewCorrespondencesAreNotFused) {
+  std::mt19937_64 rng(10);
+  const Eigen::Vector3d size(0.10, 0.06, 0.04);
+  const Eigen::Vector3d truth(0.1, 0.05, 0.8);
+  Eigen::Matrix3Xd seen = box_surface(size, 200, true, rng);
+  seen.colwise() += truth;
+  const TranslationIcp icp(box_surface(size, 2000, false, rng), IcpOptions{});
+  // Fewer observed points than min_correspondences (10), right on the surface.
+  const IcpResult few = icp.align(seen.leftCols(5), truth + Eigen::Vector3d(0.002, 0, 0));
+  // Starts 20 cm off: no point within max_correspondence_distance (2 cm) of the model.
+  const IcpResult far = icp.align(seen, truth + Eigen::Vector3d(0.0, 0.0, 0.2));
+  const IcpResult good = icp.align(seen, truth + Eigen::Vector3d(0.004, -0.003, 0.002));
+  IcpOptions one_step;
+  one_step.max_iterations = 1;
+  const IcpResult moving = TranslationIcp(box_surface(size, 2000, false, rng), one_step)
+                               .align(seen, truth + Eigen::Vector3d(0.004, -0.003, 0.002));
+  EXPECT_FALSE(moving.converged);
+  EXPECT_FALSE(moving.too_few_correspondences);
+  EXPECT_GT(moving.rms_distance, 0.0);
+  for (const IcpResult& failed : {few, far}) {
+    EXPECT_FALSE(failed.converged);
+    EXPECT_TRUE(failed.too_few_correspondences);
+    EXPECT_LT(failed.correspondences, IcpOptions{}.min_correspondences);
+    EXPECT_EQ(failed.rms_distance, 0.0);
+    EXPECT_EQ(failed.normal_information, Eigen::Matrix3d::Zero());
+  }
+  EXPECT_EQ(few.position, truth + Eigen::Vector3d(0.002, 0, 0));  // the start point
+  ASSERT_TRUE(good.converged);
+  EXPECT_FALSE(good.too_few_correspondences);
+  const std::vector<std::size_t> kept = fits_to_fuse({few, good, far, moving});
+  EXPECT_EQ(kept, (std::vector<std::size_t>{1, 3}));
+  EXPECT_TRUE(fits_to_fuse({few, far}).empty());
+}
+
 TEST(Icp, FuseFitsMatchesHandComputedWeights) {
   // Distances: D = (4, 3, 5) mm, sum 12; weights ∝ (8, 9, 7)/12 -> (1/3, 3/8, 7/24).
   const std::vector<Eigen::Vector3d> fits = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.001, 0, 0),

@@ -197,6 +197,9 @@ TEST_F(ReportHtml, CalibrationSectionPlotAndSummaryFollowTheNees) {
     row.estimate->err_y_cm = row.estimate->err_z_cm = 0.0;
     if (nees[i] >= 0) row.estimate->nees = nees[i];
     row.estimate->ess_min = 1.0 + i;
+    // The last five with the covariance columns (zero correlations), the first five without.
+    if (i >= 5)
+      row.estimate->cov_xy_cm2 = row.estimate->cov_xz_cm2 = row.estimate->cov_yz_cm2 = 0.0;
     rows.push_back(row);
   }
   rows.push_back(testing::unestimated(1.0, 0, 10));
@@ -206,6 +209,7 @@ TEST_F(ReportHtml, CalibrationSectionPlotAndSummaryFollowTheNees) {
   const ReportAnalysis analysis = analyse_report(rows, {}, options);
   const CalibrationAnalysis& c = analysis.calibration;
   ASSERT_TRUE(c.has_nees);
+  EXPECT_EQ(c.diagonal_covariances, 5);
   EXPECT_EQ(c.all.count, 10);
   EXPECT_EQ(c.all.nees_missing, 1);
   // <= 2.366: 0.2 1 2 (3 of 9); <= 6.251: + 3 6; <= 7.815: + 7; <= 11.34: + 8.
@@ -236,12 +240,14 @@ TEST_F(ReportHtml, CalibrationSectionPlotAndSummaryFollowTheNees) {
   EXPECT_EQ(json["calibration"]["all"]["coverage"][2]["nominal"], 0.95);
   EXPECT_DOUBLE_EQ(json["calibration"]["all"]["coverage"][2]["observed"].get<double>(), 6.0 / 9);
   EXPECT_EQ(json["calibration"]["confident_radius"]["count"], 5);
+  EXPECT_EQ(json["calibration"]["diagonal_covariances"], 5);
   EXPECT_EQ(json["options"]["confidence_radius_cm"], 1.0);
   EXPECT_EQ(json["thresholds"]["radius"]["chosen"]["radius_cm"], 1.0);
   EXPECT_EQ(json["thresholds"]["radius"]["chosen"]["as_variance_threshold"]["accepted"], 5);
   const std::string html = testing::read_text(files.report_html);
   for (const char* text :
-       {"id=\"calibration\"", "inside 95% ellipsoid", "Confidence radius", "Recommended radius"}) {
+       {"id=\"calibration\"", "inside 95% ellipsoid", "Confidence radius", "Recommended radius",
+        "5 estimates were read without the cov_* columns"}) {
     EXPECT_NE(html.find(text), std::string::npos) << text;
   }
   // The joined table carries the calibration columns and reads back to the same bytes.

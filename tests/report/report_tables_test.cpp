@@ -4,6 +4,7 @@
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/report/report.hpp>
 #include <clutterscope/report/tables.hpp>
+#include <cmath>
 #include <optional>
 
 #include "report_test_tables.hpp"
@@ -125,6 +126,67 @@ TEST_F(ReportTables, EstimatesOfEarlierVersionsHaveNoCalibrationColumns) {
   EXPECT_FALSE(objects[0].estimate->err_x_cm);
   EXPECT_FALSE(objects[0].estimate->nees);
   EXPECT_FALSE(objects[0].estimate->confident_radius);
+}
+
+// Issue 25: the full covariance. x and y correlated (var 1 and 1, cov 0.8): eigenvalues 1.8,
+// 0.2 and var_z 0.5, so radius95_cm = sqrt(7.8147 * 1.8), not sqrt(7.8147 * 1) from the
+// diagonal, and the decisions by radius follow it; the per-axis threshold stays per axis.
+TEST_F(ReportTables, ReadsTheFullCovarianceAndDecidesTheRadiusFromItsLargestEigenvalue) {
+  const std::string estimates =
+      "split,scene_id,im_id,gt_id,obj_id,label,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,"
+      "cov_xy_cm2,cov_xz_cm2,cov_yz_cm2,confident,err_cm,nees\n"
+      "test,1,0,0,3,coffee,1,2,700,1,1,0.5,0.8,0,0,0,0.4,2\n"
+      "test,1,0,1,7,lemon tea,10.5,-20,650,1.5,0.25,3,0,0,0,0,2.5,1\n";
+  auto objects = read_objects_csv(file("objects.csv", kObjectsCsv));
+  join_estimates(objects, read_estimates_csv(file("estimates.csv", estimates)),
+                 dir_ / "estimates.csv");
+  const PoseEstimate& coffee = *objects[0].estimate;
+  EXPECT_TRUE(coffee.has_full_covariance());
+  EXPECT_DOUBLE_EQ(*coffee.cov_xy_cm2, 0.8);
+  EXPECT_NEAR(coffee.largest_eigenvalue_cm2(), 1.8, 1e-12);
+  EXPECT_NEAR(coffee.radius95_cm(), std::sqrt(7.814727903251178 * 1.8), 1e-9);
+  EXPECT_FALSE(coffee.confident_within(std::sqrt(7.814727903251178 * 1.8) - 1e-6));
+  EXPECT_TRUE(coffee.confident_within(std::sqrt(7.814727903251178 * 1.8) + 1e-6));
+  EXPECT_TRUE(coffee.confident_at(1.0));  // the paper's rule: every axis variance <= 1
+  // The joined table keeps the entries and reads back to the same bytes.
+  const std::string joined = format_objects_csv(objects);
+  EXPECT_NE(joined.find(",var_z_cm2,cov_xy_cm2,cov_xz_cm2,cov_yz_cm2,max_var_cm2,"),
+            std::string::npos);
+  const auto again = read_objects_csv(file("joined.csv", joined));
+  EXPECT_DOUBLE_EQ(*again[0].estimate->cov_xy_cm2, 0.8);
+  EXPECT_EQ(format_objects_csv(again), joined);
+}
+
+// estimates.csv of an earlier version (no cov_* columns) is read as diagonal: its nees and
+// radius95_cm were computed with that diagonal. A partial or non-PSD covariance is refused.
+TEST_F(ReportTables, CovarianceColumnsAllOrNoneAndPositiveSemiDefinite) {
+  auto objects = read_objects_csv(file("objects.csv", kObjectsCsv));
+  join_estimates(objects, read_estimates_csv(file("estimates.csv", kEstimatesCsv)),
+                 dir_ / "estimates.csv");
+  EXPECT_FALSE(objects[1].estimate->has_full_covariance());
+  EXPECT_NEAR(objects[1].estimate->radius95_cm(), std::sqrt(7.814727903251178 * 3.0), 1e-9);
+  const std::string header =
+      "split,scene_id,im_id,gt_id,obj_id,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,";
+  const auto message_of = [&](const std::string& text) {
+    try {
+      read_estimates_csv(file("estimates.csv", text));
+    } catch (const datasets::DatasetError& error) {
+      return std::string(error.what());
+    }
+    return std::string("no error");
+  };
+  const std::string partial =
+      message_of(header + "cov_xy_cm2,confident,err_cm\ntest,1,0,0,3,1,2,700,1,1,1,0.5,0,1\n");
+  EXPECT_NE(partial.find("line 2, column cov_xz_cm2"), std::string::npos) << partial;
+  const std::string empty_field = message_of(header +
+                                             "cov_xy_cm2,cov_xz_cm2,cov_yz_cm2,confident,err_cm\n"
+                                             "test,1,0,0,3,1,2,700,1,1,1,0.5,,0,0,1\n");
+  EXPECT_NE(empty_field.find("column cov_xz_cm2"), std::string::npos) << empty_field;
+  // |cov_xy| > sqrt(var_x var_y): eigenvalue 1 - 2 < 0.
+  const std::string indefinite = message_of(header +
+                                            "cov_xy_cm2,cov_xz_cm2,cov_yz_cm2,confident,err_cm\n"
+                                            "test,1,0,0,3,1,2,700,1,1,1,2,0,0,0,1\n");
+  EXPECT_NE(indefinite.find("not positive semi-definite"), std::string::npos) << indefinite;
 }
 
 TEST_F(ReportTables, FailedEstimateRowsHaveNoEstimate) {

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/estimator/scorer.hpp>
@@ -205,11 +207,11 @@ TEST_F(EstimateGl, JobsOneAndTwoGiveByteIdenticalOutputs) {
     EXPECT_EQ(read_file(one / file), read_file(two / file)) << file;
   const auto rows = read_csv(one / "estimates.csv");
   ASSERT_GE(rows.size(), 2u);
-  EXPECT_EQ(rows[0].size(), 26u);
+  EXPECT_EQ(rows[0].size(), 29u);
   EXPECT_EQ(read_file(one / "estimates.csv").find("nan"), std::string::npos);
   int estimated = 0;
   for (std::size_t r = 1; r < rows.size(); ++r) {
-    ASSERT_EQ(rows[r].size(), 26u) << r;
+    ASSERT_EQ(rows[r].size(), 29u) << r;
     if (!rows[r][6].empty()) ++estimated;
   }
   EXPECT_GE(estimated, 6);
@@ -277,25 +279,32 @@ TEST_F(EstimateGl, ConfidenceRadiusDecidesFromThe95PercentEllipsoid) {
       continue;
     }
     ++estimated;
-    double max_variance = 0;
-    for (const char* axis : {"var_x_cm2", "var_y_cm2", "var_z_cm2"})
-      max_variance = std::max(max_variance, std::stod(row[column.at(axis)]));
-    const double radius = std::sqrt(7.814727903251178 * max_variance);
+    // The full covariance (support frame): radius95 from its largest eigenvalue, which is at
+    // least the largest axis variance (issue 25).
+    const auto value = [&](const char* name) { return std::stod(row[column.at(name)]); };
+    Eigen::Matrix3d covariance;
+    covariance << value("var_x_cm2"), value("cov_xy_cm2"), value("cov_xz_cm2"), value("cov_xy_cm2"),
+        value("var_y_cm2"), value("cov_yz_cm2"), value("cov_xz_cm2"), value("cov_yz_cm2"),
+        value("var_z_cm2");
+    const Eigen::Vector3d eigenvalues =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance).eigenvalues();
+    EXPECT_GE(eigenvalues.minCoeff(), -1e-5 * eigenvalues.maxCoeff()) << "row " << r;
+    EXPECT_GE(eigenvalues.maxCoeff(), covariance.diagonal().maxCoeff() * (1 - 1e-9));
+    const double radius = std::sqrt(7.814727903251178 * eigenvalues.maxCoeff());
     EXPECT_NEAR(std::stod(row[column.at("radius95_cm")]), radius, 1e-5 * (1 + radius));
     EXPECT_EQ(row[column.at("confident_radius")],
               radius <= 1.5 && row[column.at("consistent")] == "1" ? "1" : "0")
         << radius;
     confident_radius += row[column.at("confident_radius")] == "1";
-    // nees = sum err_a^2 / var_a (empty where a variance is 0).
-    // Checked where the columns' rounding (err_* to 4 decimals) stays below 1%.
-    double nees = 0;
-    bool checkable = true;
-    for (const char* axis : {"x", "y", "z"}) {
-      const double err = std::stod(row[column.at(std::string("err_") + axis + "_cm")]);
-      const double var = std::stod(row[column.at(std::string("var_") + axis + "_cm2")]);
-      if (var == 0 || std::abs(err) < 0.01) checkable = false;
-      if (var > 0) nees += err * err / var;
+    // nees = e^T S^-1 e (empty where S is singular). Checked where the columns' rounding
+    // (err_* to 4 decimals, covariances to 6 digits) stays below 1%.
+    Eigen::Vector3d error;
+    bool checkable = eigenvalues.minCoeff() > 1e-3 * eigenvalues.maxCoeff();
+    for (int a = 0; a < 3; ++a) {
+      error[a] = std::stod(row[column.at(std::string("err_") + "xyz"[a] + "_cm")]);
+      if (std::abs(error[a]) < 0.01) checkable = false;
     }
+    const double nees = error.dot(covariance.ldlt().solve(error));
     if (checkable) {
       EXPECT_NEAR(std::stod(row[column.at("nees")]), nees, 0.02 * nees) << "row " << r;
     }
@@ -448,7 +457,7 @@ TEST_F(EstimateGl, BadInputIsRecordedPerObjectWithoutNaN) {
       << summary.at("image_failures").dump();
   // Every object of image (0, 0) failed: its rows have empty numeric fields.
   for (const auto& row : read_csv(out / "estimates.csv")) {
-    EXPECT_EQ(row.size(), 26u) << "every row has the 26 columns of the header";
+    EXPECT_EQ(row.size(), 29u) << "every row has the 29 columns of the header";
     if (row[1] == "0" && row[2] == "0") {
       EXPECT_TRUE(row[6].empty());
       EXPECT_TRUE(row[9].empty());
@@ -538,7 +547,7 @@ TEST(EstimateHiddenGl, CompletelyHiddenObjectsGetAnEstimateThroughTheGraph) {
     std::map<std::string, std::pair<std::string, std::string>> found;  // err_cm, confident
     for (const auto& row : read_csv(folder / "estimates.csv")) {
       const std::string key = row.at(1) + "/" + row.at(2) + "/" + row.at(3);
-      if (hidden.count(key)) found[key] = {row.at(13), row.at(12)};
+      if (hidden.count(key)) found[key] = {row.at(16), row.at(15)};  // err_cm, confident
     }
     return found;
   };

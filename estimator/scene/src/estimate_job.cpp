@@ -57,6 +57,7 @@ class EstimateWorker {
     output.tables = {rows, bop_rows};
     output.summary = {{"objects", objects},
                       {"image_failures", result.image_failures},
+                      {"unmatched_detections", result.unmatched_detections},
                       {"graph_inferred", result.graph_inferred},
                       {"gravity_source", result.gravity_source},
                       {"observation", result.observation},
@@ -86,11 +87,14 @@ class EstimateWorker {
       // Significant digits, not fixed decimals: a variance of 1e-7 cm^2 must not read as 0,
       // whose log the report cannot take.
       for (int a = 0; a < 3; ++a) row.add(batch::format_general(1e4 * object.variance[a], 6));
+      for (const auto& [a, b] : {std::pair<int, int>{0, 1}, {0, 2}, {1, 2}})
+        row.add(batch::format_general(1e4 * object.covariance(a, b), 6));
       row.add(object.confident ? "1" : "0");
       row.add(100 * *object.error_m, 4).add(100 * *object.initial_error_m, 4);
       for (int a = 0; a < 3; ++a) row.add(100 * (*object.error_support_m)[a], 4);
       row.add(batch::format_general(*object.nees, 6));  // empty when not finite (a zero variance)
-      row.add(batch::format_general(estimator::radius95_cm(1e4 * object.variance.maxCoeff()), 6));
+      row.add(batch::format_general(
+          estimator::radius95_cm(1e4 * estimator::largest_eigenvalue(object.covariance)), 6));
       row.add(!confident_radius ? "" : *confident_radius ? "1" : "0");
       row.add(object.effective_sample_size, 2);
       if (object.seen_through) {
@@ -101,7 +105,7 @@ class EstimateWorker {
       row.add(object.belief_shift ? batch::format_general(*object.belief_shift, 6) : "");
       row.add(object.consistent ? "1" : "0");
     } else {
-      for (int column = 0; column < 19; ++column) row.add("");  // x_mm .. consistent
+      for (int column = 0; column < 22; ++column) row.add("");  // x_mm .. consistent
     }
     if (job_.no_time) {
       row.add("");
@@ -144,6 +148,7 @@ class EstimateWorker {
       return entry;
     }
     entry["confident"] = object.confident;
+    if (!object.amodal && object.icp_fits == 0) entry["without_fit"] = true;
     entry["err_cm"] = batch::json_rounded(100 * *object.error_m, 4);
     entry["max_var_cm2"] = batch::json_rounded(1e4 * object.variance.maxCoeff(), 6);
     // Calibration (summary.json): a non-finite NEES (a zero variance) is left out.
@@ -192,6 +197,14 @@ class EstimateSummary : public batch::SummaryBuilder {
     if (record.summary.at("observation") == "synthetic") ++synthetic_observations_;
     if (record.summary.at("detections") == "synthetic") ++synthetic_detections_;
     input_checks_.add(record.summary.at("input_checks"));
+    const int unmatched = record.summary.value("unmatched_detections", 0);
+    unmatched_total_ += unmatched;
+    if (unmatched > 0) {
+      unmatched_by_image_.push_back({{"split", record.key.split},
+                                     {"scene_id", record.key.scene_id},
+                                     {"im_id", record.key.im_id},
+                                     {"unmatched_detections", unmatched}});
+    }
     for (const auto& message : record.summary.at("image_failures")) {
       image_failures_.push_back({{"split", record.key.split},
                                  {"scene_id", record.key.scene_id},
@@ -210,6 +223,7 @@ class EstimateSummary : public batch::SummaryBuilder {
         continue;
       }
       ++estimated_;
+      without_fit_ += object.value("without_fit", false);
       const double err = object.at("err_cm").get<double>();
       const double variance = object.at("max_var_cm2").get<double>();
       const bool confident = object.at("confident").get<bool>();
@@ -253,6 +267,9 @@ class EstimateSummary : public batch::SummaryBuilder {
     summary["counts"]["objects"] = objects_;
     summary["counts"]["estimated"] = estimated_;
     summary["counts"]["confident"] = confident_errors_.size();
+    summary["counts"]["unmatched_detections"] = unmatched_total_;
+    // Visible objects no ICP result fitted: estimated from the belief alone, as hidden ones.
+    summary["counts"]["estimated_without_fit"] = without_fit_;
     double sum = 0;
     for (double e : confident_errors_) sum += e;
     double all = 0;
@@ -284,10 +301,10 @@ class EstimateSummary : public batch::SummaryBuilder {
     summary["accuracy"] = accuracy;
     nlohmann::ordered_json calibration;
     calibration["note"] =
-        "coverage: share of estimates with nees = sum_a err_a^2 / var_a (support-frame axes) at "
-        "most the chi-square (3 dof) quantile of each nominal level, over the estimates with a "
-        "finite nees (nees_missing: a zero variance); confident is every axis variance <= "
-        "variance_threshold_cm2";
+        "coverage: share of estimates with nees = e^T S^-1 e (e the error, S the full 3x3 "
+        "position covariance, support frame) at most the chi-square (3 dof) quantile of each "
+        "nominal level, over the estimates with a finite nees (nees_missing: a singular "
+        "covariance); confident is every axis variance <= variance_threshold_cm2";
     calibration["all"] = report::coverage_json(report::coverage(nees_all_));
     calibration["confident"] = report::coverage_json(report::coverage(nees_confident_));
     if (fingerprint_.contains("confidence_radius_cm")) {
@@ -298,6 +315,8 @@ class EstimateSummary : public batch::SummaryBuilder {
     summary["calibration"] = nlohmann::json::parse(calibration.dump());
     summary["object_failures"] = object_failures_;
     summary["image_failures"] = image_failures_;
+    // Images with detections attached to no object (ViewEstimate::unmatched_detections).
+    summary["unmatched_detections"] = unmatched_by_image_;
     summary["input_checks"] = input_checks_.to_json();
     summary["timing"] =
         "per-run wall time is in run.json; time_ms in estimates.csv and time in results_bop.csv "
@@ -308,13 +327,15 @@ class EstimateSummary : public batch::SummaryBuilder {
  private:
   nlohmann::json fingerprint_;
   batch::InputCheckTotals input_checks_;
-  long images_ = 0, graphs_inferred_ = 0, objects_ = 0, estimated_ = 0;
+  long images_ = 0, graphs_inferred_ = 0, objects_ = 0, estimated_ = 0, unmatched_total_ = 0;
+  long without_fit_ = 0;
   long synthetic_observations_ = 0, synthetic_detections_ = 0;
   long confident_over_2cm_ = 0, high_visibility_ = 0, high_visibility_confident_ = 0;
   std::vector<double> errors_, confident_errors_, low_variances_, high_variances_, ess_;
   std::vector<std::optional<double>> nees_all_, nees_confident_, nees_confident_radius_;
   nlohmann::json object_failures_ = nlohmann::json::array();
   nlohmann::json image_failures_ = nlohmann::json::array();
+  nlohmann::json unmatched_by_image_ = nlohmann::json::array();
 };
 
 }  // namespace
@@ -323,6 +344,7 @@ batch::BatchOutputSpec estimate_output_spec() {
   batch::BatchOutputSpec spec;
   spec.command = "estimate";
   spec.tables = {batch::estimates_table().spec(), batch::bop_results_table().spec()};
+  spec.required_options = {{"covariance", "full"}};
   spec.make_summary = [](const nlohmann::json& fingerprint, const fs::path&) {
     return std::make_unique<EstimateSummary>(fingerprint);
   };
@@ -357,8 +379,7 @@ nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
   fingerprint["variance_threshold_cm2"] = e.variance_threshold_cm2;
   if (e.confidence_radius_cm) fingerprint["confidence_radius_cm"] = *e.confidence_radius_cm;
   fingerprint["seed"] = e.seed;
-  const bool synthetic =
-      options.detections.empty() || options.detections == kSyntheticDetections;
+  const bool synthetic = options.detections.empty() || options.detections == kSyntheticDetections;
   fingerprint["detections"] = synthetic ? "" : fs::absolute(options.detections).string();
   fingerprint["save_beliefs"] = options.save_beliefs;
   fingerprint["no_time"] = options.no_time;
@@ -378,6 +399,10 @@ nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
   fingerprint["belief_proposal"] = e.adaptive_belief_proposal ? "adaptive" : "product";
   fingerprint["min_ess_fraction"] = e.min_effective_sample_fraction;
   fingerprint["correlated_pixels"] = e.correlated_pixels;
+  // Full 3x3 covariances (cov_* columns, nees = e^T S^-1 e) and only converged ICP fits fused:
+  // folders of earlier estimators (diagonal nees) neither resume nor merge with these.
+  fingerprint["covariance"] = "full";
+  fingerprint["min_detection_iou"] = e.min_detection_iou;
   // Always recorded (resolved): estimates of earlier versions assumed none.
   const ModelMisfit misfit = resolve_model_misfit(e, dataset);
   fingerprint["model_misfit_mm"] = 1e3 * misfit.translation_m;

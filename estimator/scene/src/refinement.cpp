@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <clutterscope/datasets/mesh.hpp>
+#include <clutterscope/estimator/confidence.hpp>
 #include <clutterscope/estimator/icp.hpp>
 #include <clutterscope/estimator/potentials.hpp>
 #include <cmath>
@@ -105,10 +106,13 @@ double free_space_share(SceneEstimator::State& s, int obj_id, const Eigen::Matri
 
 // The refined estimate of a visible object: the fused ICP fits from K belief samples, with the
 // covariance of the fits' information and the belief's spread (support frame), and how far the
-// refinement moved it out of its belief. False (the failure recorded) for non-finite fits.
+// refinement moved it out of its belief. Results that stopped for too few correspondences are
+// not fits and are not fused (estimator::fits_to_fuse). False when no result is a fit
+// (object->icp_fits 0: no belief sample within icp_max_distance_m of enough surface seen), and
+// with the failure recorded when a fit is not finite.
 bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
                 const estimator::GaussianMixture& belief, std::mt19937_64& rng,
-                ObjectEstimate* object, Eigen::Vector3d* mean, Eigen::Vector3d* variance) {
+                ObjectEstimate* object, Eigen::Vector3d* mean, Eigen::Matrix3d* covariance) {
   const EstimateOptions& options = s.options;
   const double threshold_m2 = options.variance_threshold_cm2 * 1e-4;
   estimator::IcpOptions icp_options;
@@ -119,14 +123,20 @@ bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
       icp_options);
   const auto [observed, normals] = observed_points(*object->observation, kIcpObservedPoints);
   const Eigen::MatrixXd starts = estimator::sample_mixture(belief, options.icp_samples, rng);
-  std::vector<Eigen::Vector3d> fits;
-  std::vector<estimator::IcpResult> fit_results;
+  std::vector<estimator::IcpResult> results;
   for (int k = 0; k < starts.cols(); ++k) {
     const Eigen::Vector3d start_camera = frame.support_to_camera * Eigen::Vector3d(starts.col(k));
-    fit_results.push_back(icp.align(observed, start_camera, &normals));
-    // Fits in the support frame, so that variances are per support-frame axis.
-    fits.push_back(frame.camera_to_support * fit_results.back().position);
+    results.push_back(icp.align(observed, start_camera, &normals));
   }
+  std::vector<Eigen::Vector3d> fits;
+  std::vector<estimator::IcpResult> fit_results;
+  for (const std::size_t k : estimator::fits_to_fuse(results)) {
+    // Fits in the support frame, so that covariances are in support-frame axes.
+    fits.push_back(frame.camera_to_support * results[k].position);
+    fit_results.push_back(results[k]);
+  }
+  object->icp_fits = static_cast<int>(fits.size());
+  if (fits.empty()) return false;
   estimator::FusedEstimate fused;
   try {
     fused = estimator::fuse_fits(fits, threshold_m2);
@@ -155,13 +165,11 @@ bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
                                                options.proposal_min_bandwidth_m);
   *mean = fused.mean;
   const Eigen::Matrix3d belief_covariance = estimator::mixture_covariance(spread);
-  *variance =
-      estimator::fused_covariance(fused.covariance, information, belief_covariance).diagonal();
+  *covariance = estimator::fused_covariance(fused.covariance, information, belief_covariance);
   // How far the refinement moved the estimate out of its belief: the squared Mahalanobis
   // distance of the refined mean from the belief's, under both covariances.
   const Eigen::Vector3d shift = *mean - estimator::mixture_mean(belief);
-  const Eigen::Matrix3d both = belief_covariance + Eigen::Matrix3d(variance->asDiagonal());
-  object->belief_shift = shift.dot(both.ldlt().solve(shift));
+  object->belief_shift = estimator::nees(shift, belief_covariance + *covariance);
   return true;
 }
 
@@ -204,22 +212,30 @@ void refine_and_fuse(SceneEstimator::State& s, const SceneFrame& frame, const Sc
             .norm();
     const estimator::GaussianMixture& belief = nbp.beliefs[static_cast<std::size_t>(node)];
     object.effective_sample_size = estimator::effective_sample_size(belief.weights);
-    Eigen::Vector3d mean, variance;  // support frame
+    Eigen::Vector3d mean;
+    Eigen::Matrix3d covariance;  // support frame
     if (object.amodal) {
       // A hidden object has nothing of its own to fit (ICP would fit the occluders in its box):
-      // the estimate is the belief's mean, its variance the belief's spread per support-frame
-      // axis (particles and kernels), confident only if that is within the threshold.
+      // the estimate is the belief's mean, its covariance the belief's spread (particles and
+      // kernels), confident only if that is within the threshold.
       mean = estimator::mixture_mean(belief);
-      variance = estimator::mixture_covariance(belief).diagonal();
-    } else if (!fit_by_icp(s, frame, belief, rng, &object, &mean, &variance)) {
-      continue;
+      covariance = estimator::mixture_covariance(belief);
+    } else if (!fit_by_icp(s, frame, belief, rng, &object, &mean, &covariance)) {
+      if (!object.failure.empty()) continue;
+      // Nothing was fitted (too few observed points near any belief sample, e.g. a sliver of a
+      // few pixels): as for a hidden object, the belief's mean and spread, never the start
+      // points fused as if they were fits.
+      mean = estimator::mixture_mean(belief);
+      covariance = estimator::mixture_covariance(belief);
     }
     // Isotropic, so the same in the support frame.
-    variance += estimator::model_misfit_covariance(s.misfit.translation_m,
-                                                   s.misfit.rotation_deg * EIGEN_PI / 180.0,
-                                                   0.5 * s.dataset.model(object.obj_id).diameter)
-                    .diagonal();
+    covariance += estimator::model_misfit_covariance(s.misfit.translation_m,
+                                                     s.misfit.rotation_deg * EIGEN_PI / 180.0,
+                                                     0.5 * s.dataset.model(object.obj_id).diameter);
+    covariance = 0.5 * (covariance + covariance.transpose());
+    const Eigen::Vector3d variance = covariance.diagonal();
     object.position = frame.support_to_camera * mean;
+    object.covariance = covariance;
     object.variance = variance;
     object.model_translation = object.position - object.rotation * object.model_centre;
     if (!object.amodal) {
@@ -232,7 +248,7 @@ void refine_and_fuse(SceneEstimator::State& s, const SceneFrame& frame, const Sc
     object.confident = (variance.array() <= threshold_m2).all() && object.consistent;
     object.error_m = (object.position - truth).norm();
     object.error_support_m = mean - frame.position[object.gt_id];
-    object.nees = (object.error_support_m->array().square() / variance.array()).sum();
+    object.nees = estimator::nees(*object.error_support_m, covariance);
     if (options.keep_history) object.beliefs = belief_history(frame, nbp, node);
   }
 }

@@ -10,6 +10,7 @@
 #include <clutterscope/datasets/random_streams.hpp>
 #include <clutterscope/datasets/sensor.hpp>
 #include <clutterscope/estimator/confidence.hpp>
+#include <clutterscope/scene_estimation/detection_matching.hpp>
 #include <clutterscope/scene_estimation/scene_estimate.hpp>
 #include <clutterscope/scene_estimation/synthetic_view.hpp>
 #include <clutterscope/visibility/image_visibility.hpp>
@@ -36,12 +37,6 @@ cv::Rect clip_box(const Eigen::Vector4d& bbox, int width, int height) {
   const int y1 = std::min(height, static_cast<int>(std::ceil(bbox[1] + bbox[3])));
   if (x1 <= x0 || y1 <= y0) return {};
   return {x0, y0, x1 - x0, y1 - y0};
-}
-
-double box_iou(const cv::Rect& a, const cv::Rect& b) {
-  const double inter = (a & b).area();
-  const double uni = a.area() + b.area() - inter;
-  return uni > 0 ? inter / uni : 0.0;
 }
 
 }  // namespace
@@ -72,6 +67,8 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (iterations < 1) return fail("--iterations must be >= 1");
   if (gibbs_sweeps < 1) return fail("--gibbs-sweeps must be >= 1");
   if (icp_samples < 1) return fail("--icp-samples must be >= 1");
+  if (!(min_detection_iou >= 0 && min_detection_iou <= 1))
+    return fail("--min-detection-iou must be in [0, 1], got " + std::to_string(min_detection_iou));
   if (!(variance_threshold_cm2 > 0) || !std::isfinite(variance_threshold_cm2))
     return fail("--variance-threshold-cm2 must be a finite number > 0 (the paper uses 0.25)");
   if (confidence_radius_cm &&
@@ -207,7 +204,8 @@ bool check_memory_bounds(const EstimateOptions& options, std::uint64_t memory_by
 }
 
 bool confident_at_radius(const ObjectEstimate& object, double radius_cm) {
-  return estimator::confident_within_radius(1e4 * object.variance.maxCoeff(), radius_cm) &&
+  return estimator::confident_within_radius(1e4 * estimator::largest_eigenvalue(object.covariance),
+                                            radius_cm) &&
          object.consistent;
 }
 
@@ -407,29 +405,38 @@ std::vector<std::vector<MatchedBox>> match_detections(SceneEstimator::State& s,
                                                       ViewEstimate* result) {
   const int n = static_cast<int>(view.objects.size());
   std::vector<std::vector<MatchedBox>> boxes(static_cast<std::size_t>(n));
+  std::vector<cv::Rect> projected(static_cast<std::size_t>(n));  // empty: fixed, never matched
+  for (int i = 0; i < n; ++i) {
+    if (frame.is_fixed[static_cast<std::size_t>(i)]) continue;
+    render::Instance instance;
+    instance.mesh = &s.models.proxy(view.objects[i].obj_id);
+    instance.model_to_camera = view.objects[i].model_to_camera;
+    projected[static_cast<std::size_t>(i)] =
+        render::Renderer::projected_rect(observed.image, instance);
+  }
   for (const datasets::Detection& detection : observed.detections) {
     const cv::Rect box = clip_box(detection.bbox, view.camera.width, view.camera.height);
-    int best = -1;
-    double best_overlap = -1;
+    std::vector<cv::Rect> candidates(static_cast<std::size_t>(n));
+    bool of_a_class = false;
     for (int i = 0; i < n; ++i) {
       if (frame.is_fixed[static_cast<std::size_t>(i)] || view.objects[i].obj_id != detection.obj_id)
         continue;
-      render::Instance instance;
-      instance.mesh = &s.models.proxy(view.objects[i].obj_id);
-      instance.model_to_camera = view.objects[i].model_to_camera;
-      const double overlap =
-          box_iou(box, render::Renderer::projected_rect(observed.image, instance));
-      if (overlap > best_overlap) {
-        best_overlap = overlap;
-        best = i;
-      }
+      candidates[static_cast<std::size_t>(i)] = projected[static_cast<std::size_t>(i)];
+      of_a_class = true;
     }
-    if (best < 0) {
+    if (!of_a_class) {
       result->image_failures.push_back("detection of obj_id " + std::to_string(detection.obj_id) +
                                        " matches no object of the scene graph; ignored");
+      ++result->unmatched_detections;
       continue;
     }
     if (box.area() == 0 || !(detection.score > 0)) continue;
+    // A box that does not overlap an object of its class enough is not that object's.
+    const int best = best_overlapping(box, candidates, s.options.min_detection_iou);
+    if (best < 0) {
+      ++result->unmatched_detections;
+      continue;
+    }
     boxes[static_cast<std::size_t>(best)].push_back(
         {box, detection.bbox, detection.score, detection.amodal});
   }

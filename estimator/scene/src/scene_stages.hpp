@@ -85,7 +85,8 @@ ObservedView observe(SceneEstimator::State& s, const datasets::SceneView& view,
                      const SceneFrame& frame, ViewEstimate* result);
 
 // The boxes of each GT instance (by obj_id; several instances of one obj_id take the boxes that
-// overlap their projected model bounds best).
+// overlap their projected model bounds best, detection_matching.hpp); a box overlapping no
+// object of its class by options.min_detection_iou is counted in result->unmatched_detections.
 std::vector<std::vector<MatchedBox>> match_detections(SceneEstimator::State& s,
                                                       const datasets::SceneView& view,
                                                       const SceneFrame& frame,

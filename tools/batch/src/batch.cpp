@@ -315,6 +315,15 @@ BatchResult merge_batches(const MergeOptions& options) {
     throw UsageError("merge: " + options.inputs[0].string() + " holds results of command '" +
                      command + "', which this clutterscope does not know");
   }
+  const nlohmann::json& stored = inputs[0].fingerprint().at("options");
+  for (const auto& [key, value] : spec->required_options.items()) {
+    if (!stored.contains(key) || stored.at(key) != value) {
+      throw UsageError("merge: " + options.inputs[0].string() + " holds " + command +
+                       " results of an earlier clutterscope (its options lack " + key + " = " +
+                       value.dump() + "), whose tables have other columns; run " + command +
+                       " again with this version");
+    }
+  }
   claim_output_folder(options.out_dir, command);
   const BatchFolder out = BatchFolder::prepare_like(options.out_dir, inputs[0]);
   std::vector<fs::path> roots = options.inputs;

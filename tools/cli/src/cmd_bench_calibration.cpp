@@ -151,8 +151,8 @@ std::vector<CalibrationRow> estimate_set(const fs::path& path, const std::string
 
 bool estimated(const CalibrationRow& row) { return row.object.failure.empty(); }
 
-double max_variance_cm2(const scene_estimation::ObjectEstimate& object) {
-  return 1e4 * object.variance.maxCoeff();
+double largest_eigenvalue_cm2(const scene_estimation::ObjectEstimate& object) {
+  return 1e4 * estimator::largest_eigenvalue(object.covariance);
 }
 
 std::optional<double> nees_of(const scene_estimation::ObjectEstimate& object) {
@@ -238,8 +238,9 @@ void print_table(const std::vector<CalibrationRow>& rows,
       source.c_str(), all.size(), failed, e.particles, e.iterations, e.icp_samples,
       e.variance_threshold_cm2);
   std::printf(
-      "coverage: share of estimates with NEES = sum err_a^2/var_a (support frame) <= "
-      "chi2_3(p), over those with a finite NEES (no_nees: a zero variance)\n\n");
+      "coverage: share of estimates with NEES = e^T S^-1 e (S the 3x3 position covariance, "
+      "support frame) <= chi2_3(p), over those with a finite NEES (no_nees: a singular "
+      "covariance)\n\n");
   std::printf("%-9s %6s %6s %6s %6s %6s %9s %7s %6s %6s %6s %8s %5s %8s %8s %7s", "band", "count",
               "cov50", "cov90", "cov95", "cov99", "nees_med", "no_nees", "ess10", "ess50", "ess90",
               "err_cm", "conf", "conf_err", "conf>2cm", "conf_sh");
@@ -272,15 +273,21 @@ std::string optional_text(const std::optional<double>& value, int significant) {
 
 constexpr const char* kCsvHeader =
     "dataset,split,scene_id,im_id,gt_id,obj_id,visib_fract,err_cm,err_x_cm,err_y_cm,err_z_cm,"
+    "var_x_cm2,var_y_cm2,var_z_cm2,cov_xy_cm2,cov_xz_cm2,cov_yz_cm2,nees,radius95_cm,confident,"
+    "confident_radius,ess_min,consistent,failure\n";
+// The header before the covariance columns (issue 25): such a file is ours too.
+constexpr const char* kDiagonalCsvHeader =
+    "dataset,split,scene_id,im_id,gt_id,obj_id,visib_fract,err_cm,err_x_cm,err_y_cm,err_z_cm,"
     "var_x_cm2,var_y_cm2,var_z_cm2,nees,radius95_cm,confident,confident_radius,ess_min,"
     "consistent,failure\n";
 
-// A CSV an earlier run wrote: it starts with the header (--csv replaces nothing else).
+// A CSV an earlier run wrote: it starts with a header of ours (--csv replaces nothing else).
 bool written_by_bench_calibration(const fs::path& path) {
   std::ifstream file(path, std::ios::binary);
-  std::string header(std::char_traits<char>::length(kCsvHeader), '\0');
-  file.read(header.data(), static_cast<std::streamsize>(header.size()));
-  return file && header == kCsvHeader;
+  std::string first_line;
+  std::getline(file, first_line);
+  first_line += '\n';
+  return file && (first_line == kCsvHeader || first_line == kDiagonalCsvHeader);
 }
 
 void write_csv(const std::vector<CalibrationRow>& rows,
@@ -296,15 +303,17 @@ void write_csv(const std::vector<CalibrationRow>& rows,
       line.add(100 * *object.error_m, 4);
       for (int a = 0; a < 3; ++a) line.add(100 * (*object.error_support_m)[a], 4);
       for (int a = 0; a < 3; ++a) line.add(batch::format_general(1e4 * object.variance[a], 6));
+      for (const auto& [a, b] : {std::pair<int, int>{0, 1}, {0, 2}, {1, 2}})
+        line.add(batch::format_general(1e4 * object.covariance(a, b), 6));
       line.add(optional_text(nees_of(object), 6));
-      line.add(batch::format_general(estimator::radius95_cm(max_variance_cm2(object)), 6));
+      line.add(batch::format_general(estimator::radius95_cm(largest_eigenvalue_cm2(object)), 6));
       line.add(object.confident ? "1" : "0");
       line.add(!radius ? "" : scene_estimation::confident_at_radius(object, *radius) ? "1" : "0");
       line.add(object.effective_sample_size, 2);
       line.add(object.consistent ? "1" : "0");
       line.add("");
     } else {
-      for (int column = 0; column < 13; ++column) line.add("");
+      for (int column = 0; column < 16; ++column) line.add("");
       line.add(object.failure);
     }
     text += line.str();

@@ -33,10 +33,10 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
   command
       .add_option_function<double>(
           "--confidence-radius-cm", [&e](double cm) { e.confidence_radius_cm = cm; },
-          "also decide confident_radius: the 95% ellipsoid of the fused covariance (semi-axes "
-          "sqrt(7.81 var_a)) fits in a sphere of this radius (cm, > 0); estimates.csv's "
-          "radius95_cm is that ellipsoid's largest semi-axis, confident_radius is empty without "
-          "this option")
+          "also decide confident_radius: the 95% ellipsoid of the full 3x3 covariance (semi-axes "
+          "sqrt(7.81 lambda_i), lambda_i its eigenvalues) fits in a sphere of this radius (cm, "
+          "> 0); estimates.csv's radius95_cm is that ellipsoid's largest semi-axis, "
+          "confident_radius is empty without this option")
       ->type_name("R");
   command
       .add_option("--unary-lambda", e.unary_lambda,
@@ -133,6 +133,13 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
       "--amodal-below-score", [&e](double score) { e.amodal_below_score = score; },
       "with --detections: estimate an object whose every box scores below this as hidden (its "
       "boxes amodal), as the synthetic detector's amodal boxes are");
+  command
+      .add_option("--min-detection-iou", e.min_detection_iou,
+                  "a detection box is an object's only if it overlaps the object's projected "
+                  "model bounds, with at least this IoU, in [0, 1] (IoU 0 never matches: 0 means "
+                  "any overlap); other boxes are unmatched (summary.json: unmatched_detections "
+                  "per image) and unused")
+      ->capture_default_str();
 }
 
 void add_estimate_options(CLI::App& command, scene_estimation::EstimateJobOptions* arguments) {

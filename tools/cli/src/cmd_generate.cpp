@@ -198,6 +198,16 @@ void add_detector_options(CLI::App& command, datasets::DetectorOptions* detector
       .add_option("--false-positives", detector->false_positives_per_image,
                   "detector: mean number of false-positive boxes per image")
       ->capture_default_str();
+  command
+      .add_option_function<std::string>(
+          "--false-positive-classes",
+          [detector](const std::string& classes) {
+            detector->false_positives_of_scene_classes = classes == "scene";
+          },
+          "detector: the class of a false-positive box: 'any' model of the dataset, or 'scene': "
+          "one of the image's objects (a box of the right class beside its object)")
+      ->check(CLI::IsMember({"any", "scene"}))
+      ->default_str("any");
   add_amodal_options(command, detector);
 }
 

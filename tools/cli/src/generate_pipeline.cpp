@@ -201,6 +201,9 @@ nlohmann::json GenerateOptions::to_json() const {
                       {"amodal_score", detector.amodal_score},
                       {"amodal_jitter", detector.amodal_jitter},
                       {"amodal_below_visibility", detector.amodal_below_visibility}};
+  // Only when set, so that generator.json of the default stays byte for byte as before.
+  if (detector.false_positives_of_scene_classes)
+    json["detector"]["false_positive_classes"] = "scene";
   json["sensor"] = datasets::to_json(sensor);
   json["clutterscope_version"] = CLUTTERSCOPE_VERSION;
   return json;

@@ -75,7 +75,8 @@ std::string threshold_sweep_plot(const ThresholdAnalysis& analysis) {
         "recommended " + batch::printf_general(*recommended.value, 3) + " cm\u00b2");
   }
   if (analysis.chosen_radius) {
-    // The radius decision is the variance threshold R^2 / chi2_3(0.95): the same curves.
+    // The radius decision is lambda_max <= R^2 / chi2_3(0.95); lambda_max >= the max-axis
+    // variance, so it accepts at most what this threshold accepts.
     chart.add_vertical_line(
         analysis.chosen_radius->row.threshold_cm2, svg::category_colour(5),
         "radius " + format_g(analysis.chosen_radius->radius_cm) + " cm (= " +

@@ -31,6 +31,7 @@ CalibrationAnalysis analyse_calibration(const std::vector<ObjectRow>& objects,
     if (!object.estimate) continue;
     const PoseEstimate& estimate = *object.estimate;
     if (estimate.ess_min) ess.push_back(*estimate.ess_min);
+    calibration.diagonal_covariances += !estimate.has_full_covariance();
     if (!estimate.err_cm) continue;
     calibration.has_nees |= estimate.err_x_cm.has_value();
     all.push_back(estimate.nees);

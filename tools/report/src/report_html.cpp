@@ -136,12 +136,19 @@ void write_calibration(std::ostringstream& out, const ReportAnalysis& analysis) 
     out << "<p>estimates.csv has no per-axis errors and NEES (written by an earlier version of "
            "<code>clutterscope estimate</code>): estimate again for the calibration.</p>\n";
   } else {
-    out << "<p>With honest variances the normalised error NEES = &Sigma;<sub>a</sub> "
-           "err<sub>a</sub>&sup2; / var<sub>a</sub> (support-frame axes) is chi-square with 3 "
-           "degrees of freedom, so a share p of the errors lies inside its own p-ellipsoid. "
-           "Observed shares below the nominal ones mean the variances claim more certainty than "
-           "the errors show. Estimates with a zero variance have no finite NEES and are counted "
-           "apart.</p>\n<table>\n<tr><th class=\"text\">estimates</th><th>with error</th>"
+    out << "<p>With an honest covariance &Sigma; the normalised error NEES = "
+           "e<sup>T</sup>&Sigma;<sup>-1</sup>e (the full 3&times;3 position covariance, "
+           "support frame) is chi-square with 3 degrees of freedom, so a share p of the errors "
+           "lies inside its own p-ellipsoid. Observed shares below the nominal ones mean the "
+           "covariances claim more certainty than the errors show. Estimates with a singular "
+           "covariance have no finite NEES and are counted apart.</p>\n";
+    if (calibration.diagonal_covariances > 0) {
+      out << "<p>" << calibration.diagonal_covariances
+          << " estimates were read without the cov_* columns (written by an earlier version of "
+             "<code>clutterscope estimate</code>): their covariance, NEES and radius are "
+             "diagonal.</p>\n";
+    }
+    out << "<table>\n<tr><th class=\"text\">estimates</th><th>with error</th>"
            "<th>no finite NEES</th>";
     for (const CoverageLevel& level : kCoverageLevels) {
       out << "<th>inside " << printf_fixed(100 * level.nominal, 0) << "% ellipsoid</th>";
@@ -224,10 +231,11 @@ void write_radius_thresholds(std::ostringstream& out, const ReportAnalysis& anal
   const ThresholdAnalysis& t = analysis.thresholds;
   const auto& radius_rec = t.radius_recommendation;
   out << "<h3>Confidence radius</h3>\n<p>The calibrated decision: confident iff the 95% "
-         "ellipsoid fits in a sphere of radius R, i.e. sqrt(7.815 &middot; max-axis variance) "
-         "&le; R (the same ordering as the variance threshold, R&sup2; / 7.815 cm&sup2;, but in "
-         "centimetres of error when the variances are calibrated). Recommended radius: "
-         "<strong>";
+         "ellipsoid fits in a sphere of radius R, i.e. sqrt(7.815 &middot; &lambda;<sub>max</sub>) "
+         "&le; R, &lambda;<sub>max</sub> the covariance's largest eigenvalue (a threshold "
+         "R&sup2; / 7.815 cm&sup2; on &lambda;<sub>max</sub>, which is at least the max-axis "
+         "variance, in centimetres of error when the covariances are calibrated). Recommended "
+         "radius: <strong>";
   if (radius_rec.largest_with_min_precision.defined()) {
     out << general(*radius_rec.largest_with_min_precision.value)
         << " cm</strong> (the largest swept radius with precision &ge; "
@@ -236,7 +244,8 @@ void write_radius_thresholds(std::ostringstream& out, const ReportAnalysis& anal
     out << "none</strong> (" << html_escape(radius_rec.largest_with_min_precision.undefined_reason)
         << ")";
   }
-  out << ".</p>\n<table>\n<tr><th>radius R (cm)</th><th>equivalent threshold (cm&sup2;)</th>"
+  out << ".</p>\n<table>\n<tr><th>radius R (cm)</th><th>equivalent &lambda;<sub>max</sub> "
+         "threshold (cm&sup2;)</th>"
       << "<th>accepted</th><th>precision</th><th>recall</th><th>F1</th><th>accepted below "
       << printf_fixed(100 * options.visibility_cutoff, 0) << "%</th></tr>\n";
   for (const RadiusRow& radius : t.radius_sweep) {

@@ -173,8 +173,9 @@ Json thresholds_json(const ThresholdAnalysis& t, const ReportOptions& options) {
           {"by_visibility_cutoff", cutoffs_json(t.by_cutoff)},
           {"radius",
            {{"note",
-             "confident iff the 95% ellipsoid fits in a sphere of radius R: sqrt(7.8147 * max-axis "
-             "variance) <= R, i.e. max-axis variance <= R^2 / 7.8147 (equivalent_threshold_cm2)"},
+             "confident iff the 95% ellipsoid fits in a sphere of radius R: sqrt(7.8147 * "
+             "lambda_max) <= R (lambda_max the covariance's largest eigenvalue), i.e. lambda_max "
+             "<= R^2 / 7.8147 (as_variance_threshold.threshold_cm2)"},
             {"sweep", radius_sweep},
             {"chosen", t.chosen_radius ? radius_row_json(*t.chosen_radius) : Json(nullptr)},
             {"recommended",
@@ -184,12 +185,14 @@ Json thresholds_json(const ThresholdAnalysis& t, const ReportOptions& options) {
 Json calibration_json(const CalibrationAnalysis& calibration) {
   Json json;
   json["note"] =
-      "over estimates with an error against GT: coverage is the share with nees = sum_a "
-      "err_a^2 / var_a (support-frame axes) at most the chi-square (3 dof) quantile of each "
-      "nominal level, among those with a finite nees (nees_missing: a zero variance, or an "
-      "estimates.csv without the nees column); confident is max-axis variance <= "
-      "variance_threshold_cm2";
+      "over estimates with an error against GT: coverage is the share with nees = e^T S^-1 e "
+      "(e the error, S the 3x3 position covariance, support frame) at most the chi-square (3 "
+      "dof) quantile of each nominal level, among those with a finite nees (nees_missing: a "
+      "singular covariance, or an estimates.csv without the nees column); confident is max-axis "
+      "variance <= variance_threshold_cm2; diagonal_covariances: estimates read without the "
+      "cov_* columns (an earlier version's diagonal covariance and nees)";
   json["has_nees"] = calibration.has_nees;
+  json["diagonal_covariances"] = calibration.diagonal_covariances;
   json["all"] = coverage_json(calibration.all);
   json["confident"] = coverage_json(calibration.confident);
   json["confident_radius"] =

@@ -1,3 +1,5 @@
+#include <Eigen/Eigenvalues>
+#include <array>
 #include <charconv>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/table_layouts.hpp>
@@ -36,6 +38,34 @@ std::optional<PoseEstimate> parse_estimate(const CsvTable& table, const CsvRecor
   estimate.var_x_cm2 = table.non_negative(record, "var_x_cm2");
   estimate.var_y_cm2 = table.non_negative(record, "var_y_cm2");
   estimate.var_z_cm2 = table.non_negative(record, "var_z_cm2");
+  // The off-diagonal entries: all three or none (an earlier version's diagonal covariance).
+  const std::array<std::pair<const char*, std::optional<double>*>, 3> off_diagonal = {
+      {{"cov_xy_cm2", &estimate.cov_xy_cm2},
+       {"cov_xz_cm2", &estimate.cov_xz_cm2},
+       {"cov_yz_cm2", &estimate.cov_yz_cm2}}};
+  int given = 0;
+  for (const auto& entry : off_diagonal) {
+    if (table.has_column(entry.first)) *entry.second = table.optional_number(record, entry.first);
+    given += entry.second->has_value();
+  }
+  if (given != 0 && given != 3) {
+    for (const auto& entry : off_diagonal) {
+      if (!entry.second->has_value()) {
+        table.fail(record, entry.first,
+                   "missing: a covariance needs all of cov_xy_cm2, cov_xz_cm2, cov_yz_cm2 or none");
+      }
+    }
+  }
+  if (given == 3) {
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(estimate.covariance_cm2(),
+                                                          Eigen::EigenvaluesOnly);
+    // Written with 6 significant digits: allow their rounding.
+    if (solver.eigenvalues().minCoeff() < -1e-5 * std::max(1e-300, estimate.max_variance_cm2())) {
+      table.fail(record, "cov_xy_cm2",
+                 "the covariance is not positive semi-definite (smallest eigenvalue " +
+                     batch::format_shortest(solver.eigenvalues().minCoeff()) + " cm^2)");
+    }
+  }
   estimate.confident = table.boolean(record, "confident");
   estimate.err_cm = table.optional_non_negative(record, "err_cm");
   if (table.has_column("init_err_cm")) {
@@ -65,15 +95,27 @@ double PoseEstimate::max_variance_cm2() const {
   return std::max(var_x_cm2, std::max(var_y_cm2, var_z_cm2));
 }
 
+Eigen::Matrix3d PoseEstimate::covariance_cm2() const {
+  Eigen::Matrix3d covariance;
+  const double xy = cov_xy_cm2.value_or(0.0), xz = cov_xz_cm2.value_or(0.0),
+               yz = cov_yz_cm2.value_or(0.0);
+  covariance << var_x_cm2, xy, xz, xy, var_y_cm2, yz, xz, yz, var_z_cm2;
+  return covariance;
+}
+
+double PoseEstimate::largest_eigenvalue_cm2() const {
+  return estimator::largest_eigenvalue(covariance_cm2());
+}
+
 bool PoseEstimate::confident_at(double threshold_cm2) const {
   return max_variance_cm2() <= threshold_cm2 && consistent;
 }
 
 bool PoseEstimate::confident_within(double radius_cm) const {
-  return confident_within_radius(max_variance_cm2(), radius_cm) && consistent;
+  return confident_within_radius(largest_eigenvalue_cm2(), radius_cm) && consistent;
 }
 
-double PoseEstimate::radius95_cm() const { return report::radius95_cm(max_variance_cm2()); }
+double PoseEstimate::radius95_cm() const { return report::radius95_cm(largest_eigenvalue_cm2()); }
 
 std::vector<ObjectRow> read_objects_csv(const std::filesystem::path& path) {
   const CsvTable table = CsvTable::read(path, batch::visibility_objects_table().required_columns());
@@ -200,14 +242,16 @@ std::string format_objects_csv(const std::vector<ObjectRow>& objects) {
       out << ',' << batch::format_shortest(e.x_mm) << ',' << batch::format_shortest(e.y_mm) << ','
           << batch::format_shortest(e.z_mm) << ',' << batch::format_shortest(e.var_x_cm2) << ','
           << batch::format_shortest(e.var_y_cm2) << ',' << batch::format_shortest(e.var_z_cm2)
-          << ',' << batch::format_shortest(e.max_variance_cm2()) << ',' << (e.confident ? 1 : 0)
-          << ',' << optional(e.err_cm) << ',' << optional(e.init_err_cm) << ','
-          << optional(e.err_x_cm) << ',' << optional(e.err_y_cm) << ',' << optional(e.err_z_cm)
-          << ',' << optional(e.nees) << ',' << batch::format_shortest(e.radius95_cm()) << ','
+          << ',' << optional(e.cov_xy_cm2) << ',' << optional(e.cov_xz_cm2) << ','
+          << optional(e.cov_yz_cm2) << ',' << batch::format_shortest(e.max_variance_cm2()) << ','
+          << (e.confident ? 1 : 0) << ',' << optional(e.err_cm) << ',' << optional(e.init_err_cm)
+          << ',' << optional(e.err_x_cm) << ',' << optional(e.err_y_cm) << ','
+          << optional(e.err_z_cm) << ',' << optional(e.nees) << ','
+          << batch::format_shortest(e.radius95_cm()) << ','
           << (e.confident_radius ? (*e.confident_radius ? "1" : "0") : "") << ','
           << optional(e.ess_min) << ',' << optional(e.time_ms) << ',' << (e.consistent ? 1 : 0);
     } else {
-      out << ",,,,,,,,,,,,,,,,,,,";
+      out << ",,,,,,,,,,,,,,,,,,,,,,";
     }
     out << '\n';
   }

@@ -280,10 +280,11 @@ std::string format_threshold_check(const std::vector<ObjectRow>& objects, double
   }
   if (radius_cm) {
     const RadiusRow radius = evaluate_radius(objects, *radius_cm, accurate_cm, visibility_cutoff);
-    std::snprintf(line, sizeof(line),
-                  "\nconfidence radius %g cm (confident iff the 95%% ellipsoid fits in a sphere "
-                  "of radius R, i.e. every axis variance <= R^2 / 7.815 = %.4g cm^2)\n",
-                  *radius_cm, radius.row.threshold_cm2);
+    std::snprintf(
+        line, sizeof(line),
+        "\nconfidence radius %g cm (confident iff the 95%% ellipsoid fits in a sphere "
+        "of radius R, i.e. the covariance's largest eigenvalue <= R^2 / 7.815 = %.4g cm^2)\n",
+        *radius_cm, radius.row.threshold_cm2);
     out << line << decision_lines(radius.row, visibility_cutoff);
   }
   return out.str();

@@ -25,6 +25,9 @@ struct DetectorOptions {
   double score_noise = 0.02;               // std. dev. of the score noise
   double duplicate_probability = 0.0;      // per detection: one more jittered box, half the score
   double false_positives_per_image = 0.0;  // Poisson mean of random boxes with low scores
+  // False positives of the classes of the image's non-fixed instances (the hard case: a box
+  // of the right class elsewhere in the image) instead of any of `category_ids`.
+  bool false_positives_of_scene_classes = false;
   // Hidden instances (fewer than min_visible_px visible pixels): the box of their silhouette
   // rendered alone, with score amodal_score (every visible detection's score is clamped above
   // it) and edge jitter amodal_jitter (fraction of box w or h). Off: hidden ones get no box.
@@ -51,7 +54,8 @@ struct DetectorInstance {
 
 // Detections of one image from its label image (CV_32S, 0 = background, i + 1 = instance i).
 // bbox = [xmin, ymin, xmax - xmin, ymax - ymin] of the visible pixels as in bop_toolkit,
-// jittered and clipped to the image. False positives take an obj_id from `category_ids`.
+// jittered and clipped to the image. False positives take an obj_id from `category_ids` (with
+// false_positives_of_scene_classes: from the non-fixed instances', when there are any).
 // Amodal boxes of hidden instances (Detection::amodal) come last, after the false positives,
 // each from the bop_toolkit bbox of `silhouette_bbox`, so that the boxes and scores of visible
 // instances and false positives are those of a detector without amodal boxes.

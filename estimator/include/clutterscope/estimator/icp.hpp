@@ -42,6 +42,9 @@ struct IcpResult {
   Eigen::Matrix3d normal_information = Eigen::Matrix3d::Zero();
   int iterations = 0;
   bool converged = false;  // step below convergence_step with enough correspondences
+  // Stopped because an iteration had fewer than min_correspondences: no fit at all. With none
+  // in the first iteration, position is the start point, rms_distance 0, no information.
+  bool too_few_correspondences = false;
 };
 
 class TranslationIcp {
@@ -68,6 +71,14 @@ class TranslationIcp {
   std::unique_ptr<Tree> tree_;
   IcpOptions options_;
 };
+
+// The indices (in order) of the results that are fits, to be fused: every one that did not stop
+// for too few correspondences. Such a result is not a fit (none in the first iteration: its
+// start point, a belief sample, with rms 0 and no information) and is never fused. A result
+// still moving after max_iterations is a fit: with enough correspondences it has settled in the
+// directions its surfaces constrain and creeps only along those they do not (the point-to-point
+// term is weak), which the fused covariance bounds by the belief.
+std::vector<std::size_t> fits_to_fuse(const std::vector<IcpResult>& results);
 
 struct FusedEstimate {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();

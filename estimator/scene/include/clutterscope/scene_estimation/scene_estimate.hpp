@@ -31,6 +31,7 @@
 #include <clutterscope/estimator/nbp.hpp>
 #include <clutterscope/estimator/scorer.hpp>
 #include <clutterscope/render/model_cache.hpp>
+#include <clutterscope/scene_estimation/detection_matching.hpp>
 #include <clutterscope/scene_estimation/render_scorer.hpp>
 #include <cstdint>
 #include <memory>
@@ -118,6 +119,10 @@ struct EstimateOptions {
   // The synthetic detector (no attached detections): boxes of the visible pixels, and the
   // amodal box of every completely hidden object (DetectorOptions::amodal_boxes).
   datasets::DetectorOptions detector;
+  // A detection is an object's only if its box overlaps the object's projected model bounds,
+  // with an IoU of at least this (in [0, 1]; IoU 0 never matches); other boxes are unmatched,
+  // counted per image (ViewEstimate::unmatched_detections) and not used (--min-detection-iou).
+  double min_detection_iou = kDefaultMinDetectionIou;
   // Attached detections do not say which boxes are amodal: with a value, an object whose every
   // box scores below it is estimated as hidden, like one with the synthetic detector's amodal
   // boxes (--amodal-below-score).
@@ -162,12 +167,15 @@ struct ObjectEstimate {
   std::string label;
   std::string failure;                                 // empty when estimated
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // object centre, camera frame, metres
-  Eigen::Vector3d variance = Eigen::Vector3d::Zero();  // per support-frame axis, metres^2
+  // The position covariance in the support frame (metres^2, symmetric positive semi-definite):
+  // depth noise lies along the camera ray, oblique to the support axes, so the axes correlate.
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d variance = Eigen::Vector3d::Zero();  // its diagonal: per support-frame axis
   bool confident = false;
   std::optional<double> error_m, initial_error_m;  // vs the GT centre
-  // Estimate minus GT centre per support-frame axis (the axes of `variance`), metres, and the
-  // normalised estimation error squared sum_a error_a^2 / variance_a (chi-square with 3 degrees
-  // of freedom when the variance is honest).
+  // Estimate minus GT centre per support-frame axis (the axes of `covariance`), metres, and the
+  // normalised estimation error squared e^T covariance^-1 e (estimator::nees: chi-square with 3
+  // degrees of freedom when the covariance is honest).
   std::optional<Eigen::Vector3d> error_support_m;
   std::optional<double> nees;
   double effective_sample_size = 0;  // of the final belief's weights
@@ -178,6 +186,10 @@ struct ObjectEstimate {
   // ICP-refined estimates: the squared Mahalanobis distance of the refined mean from the final
   // belief's mean under the sum of both covariances (chi-square, 3 dof, when they agree).
   std::optional<double> belief_shift;
+  // Visible objects: how many of the K ICP results were fits (estimator::fits_to_fuse). With
+  // none (too few observed points near any belief sample) the estimate is the belief's mean and
+  // spread, as for a hidden object (summary.json: estimated_without_fit).
+  int icp_fits = 0;
   // Both checks passed (always for hidden objects, which have neither); `confident` needs it.
   bool consistent = true;
   // Eq. 10 visibility of the GT instance (visible / silhouette pixels), for evaluation only.
@@ -198,6 +210,10 @@ struct ObjectEstimate {
 struct ViewEstimate {
   std::vector<ObjectEstimate> objects;      // non-fixed GT instances in gt order
   std::vector<std::string> image_failures;  // e.g. detections of objects not in the graph
+  // Detections attached to no object: of a class not in the view, or overlapping no object of
+  // their class by EstimateOptions::min_detection_iou (false positives). Boxes outside the
+  // image or with score 0, which are dropped before matching, are not counted.
+  int unmatched_detections = 0;
   bool graph_inferred = false;
   std::string gravity_source;
   std::string observation;  // "measured" or "synthetic"

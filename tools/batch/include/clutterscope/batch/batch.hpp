@@ -128,6 +128,10 @@ struct BatchOutputSpec {
   std::function<std::unique_ptr<SummaryBuilder>(const nlohmann::json& options,
                                                 const std::filesystem::path& out_dir)>
       make_summary;
+  // Options (fingerprint "options" entries) every folder of this output must carry: a folder
+  // written by an earlier version without them holds rows of other columns, which merge refuses
+  // rather than writing them under this version's header.
+  nlohmann::json required_options = nlohmann::json::object();
 };
 
 struct Shard {

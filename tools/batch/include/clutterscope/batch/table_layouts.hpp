@@ -33,7 +33,11 @@ struct TableLayout {
 const TableLayout& visibility_objects_table();
 // `visibility`: images.csv, one row per image with the scene visibility V^s.
 const TableLayout& visibility_images_table();
-// `estimate`: estimates.csv, one row per estimated object.
+// `estimate`: estimates.csv, one row per estimated object. The position covariance is in the
+// support frame (z up), cm^2: var_x_cm2, var_y_cm2, var_z_cm2 its diagonal, cov_xy_cm2,
+// cov_xz_cm2, cov_yz_cm2 its off-diagonal entries (written since issue 25; a file without them
+// is read as a diagonal covariance, which is what its nees and radius95_cm assumed). nees =
+// e^T S^-1 e (chi-square, 3 dof), radius95_cm = sqrt(chi2_3(0.95) lambda_max(S)).
 const TableLayout& estimates_table();
 // `estimate`: results_bop.csv, BOP's 6D pose results format.
 const TableLayout& bop_results_table();

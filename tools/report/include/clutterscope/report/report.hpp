@@ -81,6 +81,9 @@ struct CalibrationAnalysis {
   std::optional<Coverage> confident_radius;
   EssQuantiles ess_min;
   bool has_nees = false;  // false: estimates.csv without the nees column (an earlier version)
+  // Estimates read without cov_* columns (an earlier version's diagonal covariance, whose nees
+  // and radius were diagonal too): counted, so that a report says which covariance it used.
+  int diagonal_covariances = 0;
 };
 
 struct ReportAnalysis {

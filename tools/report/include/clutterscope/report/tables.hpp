@@ -5,6 +5,7 @@
 // per-image table. Readers validate every field and throw datasets::DatasetError naming the
 // file, line and field; they never produce NaN.
 
+#include <Eigen/Core>
 #include <array>
 #include <filesystem>
 #include <optional>
@@ -21,12 +22,15 @@ struct PoseEstimate {
   double var_x_cm2 = 0.0;
   double var_y_cm2 = 0.0;
   double var_z_cm2 = 0.0;
+  // The covariance's off-diagonal entries (support frame, cm^2). Unset: estimates.csv of an
+  // earlier version, whose covariance (and nees, radius95_cm) was diagonal: read as diagonal.
+  std::optional<double> cov_xy_cm2, cov_xz_cm2, cov_yz_cm2;
   bool confident = false;        // as written by the estimator with its threshold
   std::optional<double> err_cm;  // position error against GT, where GT exists
   std::optional<double> init_err_cm;
   // Calibration (optional columns; estimates.csv of earlier versions lacks them): the error per
-  // support-frame axis (the axes of var_*) and NEES = sum err_a^2 / var_a, empty where not
-  // finite (a zero variance).
+  // support-frame axis (the axes of var_*) and NEES = e^T S^-1 e, empty where not finite (a
+  // singular covariance).
   std::optional<double> err_x_cm, err_y_cm, err_z_cm;
   std::optional<double> nees;
   std::optional<bool> confident_radius;  // as written by the estimator with --confidence-radius-cm
@@ -37,11 +41,17 @@ struct PoseEstimate {
 
   // The variance the threshold is applied to: max over axes, so "max ≤ T" means every axis ≤ T.
   double max_variance_cm2() const;
+  // True when the file gave the off-diagonal entries (else the covariance is read as diagonal).
+  bool has_full_covariance() const { return cov_xy_cm2.has_value(); }
+  // The 3x3 covariance (cm^2), symmetric; off-diagonal 0 where the file gave none.
+  Eigen::Matrix3d covariance_cm2() const;
+  // The variance along the covariance's longest axis (its largest eigenvalue, cm^2).
+  double largest_eigenvalue_cm2() const;
   // The decisions at other thresholds, as the estimator makes them: max_variance_cm2() <=
   // threshold_cm2 (the 95% ellipsoid within radius_cm), and consistent.
   bool confident_at(double threshold_cm2) const;
   bool confident_within(double radius_cm) const;
-  // Largest semi-axis of the 95% ellipsoid: sqrt(chi2_3(0.95) * max_variance_cm2()) (cm).
+  // Longest semi-axis of the 95% ellipsoid: sqrt(chi2_3(0.95) * largest_eigenvalue_cm2()) (cm).
   double radius95_cm() const;
 };
 
@@ -105,7 +115,7 @@ void join_estimates(std::vector<ObjectRow>& objects, const std::vector<EstimateR
                     const std::filesystem::path& estimates_file);
 
 // The joined table as CSV: the visibility columns, then x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,
-// var_z_cm2,max_var_cm2,confident,err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,
+// var_z_cm2,cov_xy_cm2,cov_xz_cm2,cov_yz_cm2,max_var_cm2,confident,err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,
 // radius95_cm,confident_radius,ess_min,time_ms,consistent (empty when absent).
 // Numbers use the shortest round-trip form (batch::format_shortest), so reading and writing again
 // gives equal bytes.

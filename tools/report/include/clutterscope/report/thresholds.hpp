@@ -59,8 +59,8 @@ ThresholdRow evaluate_threshold(const std::vector<ObjectRow>& objects, double th
                                 double accurate_cm, double visibility_cutoff);
 
 // Evaluates the radius decision (radius95_cm <= radius_cm, calibration.hpp) like
-// evaluate_threshold(); the row's threshold_cm2 is the equivalent variance threshold
-// R^2 / chi2_3(0.95).
+// evaluate_threshold(); the row's threshold_cm2 is the equivalent threshold R^2 / chi2_3(0.95)
+// on the covariance's largest eigenvalue.
 struct RadiusRow {
   double radius_cm = 0.0;
   ThresholdRow row;
