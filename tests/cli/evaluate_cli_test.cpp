@@ -444,7 +444,7 @@ TEST_F(EvaluateCli, RefusesTwoFilesOfOneNameAndMissingTargetsOrGtInfo) {
       " --results " + small + " --out " + quoted(scratch() / "no_info") + " -q" + kNoVsd);
   EXPECT_EQ(no_info.exit_code, 3);
   EXPECT_NE(no_info.errors.find((bare / "test" / "000000" / "scene_gt_info.json").string() +
-                                ": missing: evaluate needs the bop19 visib_fract"),
+                                ": missing: the evaluation needs the bop19 visib_fract"),
             std::string::npos)
       << no_info.errors;
 

@@ -116,6 +116,20 @@ fs::path scene_gt_info_path(const datasets::BopDataset& dataset, const std::stri
   return dataset.root() / split / datasets::six_digits(scene_id) / "scene_gt_info.json";
 }
 
+// The scene's scene_gt_info.json, which must exist: its visib_fract decides the GT that counts.
+void require_scene_gt_info(const datasets::BopDataset& dataset, const std::string& split,
+                           int scene_id) {
+  const fs::path path = scene_gt_info_path(dataset, split, scene_id);
+  std::error_code error;
+  if (!fs::is_regular_file(path, error)) {
+    throw datasets::DatasetError(
+        path,
+        "missing: the evaluation needs the bop19 visib_fract of every GT instance, which "
+        "decides the GT instances that count (bop_toolkit's calc_gt_info.py writes it; so "
+        "does `clutterscope visibility --mode bop19 --write-bop-info`)");
+  }
+}
+
 class EvaluateWorker {
  public:
   // vsd: VSD's options when VSD is computed; the worker then renders on its own context.
@@ -267,14 +281,7 @@ class EvaluateWorker {
                                             const datasets::SceneView& view) {
     const fs::path path = scene_gt_info_path(dataset_, key.split, key.scene_id);
     if (scene_id_ != key.scene_id || scene_split_ != key.split) {
-      std::error_code error;
-      if (!fs::is_regular_file(path, error)) {
-        throw datasets::DatasetError(
-            path,
-            "missing: evaluate needs the bop19 visib_fract of every GT instance, which "
-            "decides the GT instances that count (bop_toolkit's calc_gt_info.py writes "
-            "it; so does `clutterscope visibility --mode bop19 --write-bop-info`)");
-      }
+      require_scene_gt_info(dataset_, key.split, key.scene_id);
       scene_visib_ = datasets::read_scene_gt_visib_fract(path, key.scene_id);
       scene_id_ = key.scene_id;
       scene_split_ = key.split;
@@ -966,16 +973,8 @@ batch::BatchResult evaluate(const EvaluateJobOptions& options, bool check_only) 
   if (check_only) {
     // The run finds a missing scene_gt_info.json per image (a failed image under --keep-going);
     // a front end running other steps first wants it before.
-    std::error_code missing;
     for (const datasets::ImageKey& key : job.items) {
-      const fs::path path = scene_gt_info_path(dataset, key.split, key.scene_id);
-      if (!fs::is_regular_file(path, missing)) {
-        throw datasets::DatasetError(
-            path,
-            "missing: the evaluation needs the bop19 visib_fract of every GT instance, "
-            "which decides the GT instances that count (bop_toolkit's calc_gt_info.py "
-            "writes it; so does `clutterscope visibility --mode bop19 --write-bop-info`)");
-      }
+      require_scene_gt_info(dataset, key.split, key.scene_id);
     }
     return {};
   }
