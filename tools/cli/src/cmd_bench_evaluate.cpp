@@ -170,7 +170,9 @@ long write_results(const DenseWorkload& workload, int image_count, int per_objec
 }
 
 struct EvaluateRun {
-  double seconds = 0;  // wall time of the whole job, set-up and final files included
+  double seconds = 0;       // wall time of the whole job, set-up and final files included
+  double cpu_seconds = 0;   // the process's CPU time meanwhile
+  double item_seconds = 0;  // the per-image function's time, summed over the images
   scene_estimation::EvaluateStageTimes stages;
   fs::path out;
 };
@@ -196,9 +198,23 @@ EvaluateRun run_evaluation(const fs::path& root, const fs::path& results, const 
   run.out = out;
   options.stage_times = &run.stages;
   const BenchClock::time_point start = BenchClock::now();
-  scene_estimation::run_evaluate_job(options);
+  const double cpu_start = process_cpu_seconds();
+  const batch::BatchResult result = scene_estimation::run_evaluate_job(options);
   run.seconds = seconds_since(start);
+  run.item_seconds = result.seconds_per_item * static_cast<double>(result.computed);
+  run.cpu_seconds = process_cpu_seconds() - cpu_start;
   return run;
+}
+
+// The 1-minute load average of the machine (NAN where /proc does not tell): a ratio of --jobs
+// is meaningful only while the machine has cores to spare.
+double load_average() {
+  double load = NAN;
+  if (std::FILE* file = std::fopen("/proc/loadavg", "r")) {
+    if (std::fscanf(file, "%lf", &load) != 1) load = NAN;
+    std::fclose(file);
+  }
+  return load;
 }
 
 double per_estimate_ms(double seconds, long estimates) {
@@ -238,6 +254,9 @@ void run_bench_evaluate(const BenchEvaluateArguments& arguments) {
                             " exists; give a new folder");
   }
 
+  // Before any context: every context of the run, the set-up's too, rasterises on its own
+  // thread (render/context.hpp), or the set-up's display would keep llvmpipe's threads.
+  const render::WorkerRasterisationScope rasterisation;
   BenchClock::time_point start = BenchClock::now();
   DenseWorkload workload = make_dense_workload(options);
   const fs::path results = root / "results" / "dense.csv";
@@ -265,9 +284,11 @@ void run_bench_evaluate(const BenchEvaluateArguments& arguments) {
 
   // The whole evaluation at --jobs 1 and --jobs N, one after the other.
   const std::vector<std::string> all = {"vsd", "mssd", "mspd"};
+  const double load_before = load_average();
   const EvaluateRun one = run_evaluation(root, results, root / "out_jobs_1", 1, all, "", true);
   const EvaluateRun many =
       run_evaluation(root, results, root / "out_jobs_n", arguments.jobs, all, "", true);
+  const double load_after = load_average();
   const scene_estimation::EvaluateStageTimes& s = one.stages;
   const bool same =
       datasets::read_file(one.out / "errors.csv") == datasets::read_file(many.out / "errors.csv") &&
@@ -298,16 +319,22 @@ void run_bench_evaluate(const BenchEvaluateArguments& arguments) {
               per_estimate_ms(s.mspd_s, s.estimates), 1e9 * s.mspd_s / point_transforms);
   std::printf("  load   %8.2f  (GT, scene_gt_info, depth image: %.2f ms per image)\n",
               per_estimate_ms(s.load_s, s.estimates), per_estimate_ms(s.load_s, s.images));
-  const double rest = one.seconds - s.load_s - s.vsd_s - s.mssd_s - s.mspd_s;
-  std::printf("  other  %8.2f  (set-up, digests, models, parts, scores and final files)\n",
+  const double rest = one.item_seconds - s.load_s - s.vsd_s - s.mssd_s - s.mspd_s;
+  std::printf("  rest   %8.2f  (of the per-image work: input digests, rows, parts)\n",
               per_estimate_ms(rest, s.estimates));
+  std::printf(
+      "  outside%8.2f  (not per image: set-up, the worker's context and models, scores and "
+      "final files)\n",
+      per_estimate_ms(one.seconds - one.item_seconds, s.estimates));
   std::printf("  total  %8.2f  (wall time of the whole evaluation / estimates evaluated)\n",
               per_estimate_ms(one.seconds, s.estimates));
   std::printf(
       "whole evaluation (wall): --jobs 1 %.2f s, --jobs %d %.2f s: --jobs %d / --jobs 1 = %.2f "
-      "(target >= 1.7); outputs identical: %s\n",
+      "(target >= 1.7); cores busy %.2f and %.2f, CPU time %.2f and %.2f s; machine load "
+      "average %.2f before, %.2f after; outputs identical: %s\n",
       one.seconds, arguments.jobs, many.seconds, arguments.jobs, one.seconds / many.seconds,
-      same ? "yes" : "NO");
+      one.cpu_seconds / one.seconds, many.cpu_seconds / many.seconds, one.cpu_seconds,
+      many.cpu_seconds, load_before, load_after, same ? "yes" : "NO");
   std::fflush(stdout);
 
   if (arguments.full_frame_images == 0) return;
