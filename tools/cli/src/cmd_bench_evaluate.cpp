@@ -46,6 +46,7 @@ struct BenchEvaluateArguments {
   int objects = 8;                // per image: 125 x 8 = 1,000 targets
   int estimates_per_object = 3;   // in the results file; BOP evaluates the best-scored one
   int jobs = 2;
+  int rounds = 1;              // of the two comparisons, run one after the other
   int full_frame_images = 25;  // images of the whole-image VSD comparison; 0 skips it
   std::string keep;            // a folder to write into and keep; empty: a temporary one
 };
@@ -221,6 +222,52 @@ double per_estimate_ms(double seconds, long estimates) {
   return estimates > 0 ? 1e3 * seconds / static_cast<double>(estimates) : 0.0;
 }
 
+double median_of(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n == 0 ? NAN : n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+// The time per estimate of each error and of the rest, from a --jobs 1 run on every image.
+void print_breakdown(const EvaluateRun& one, const DenseWorkload& workload, int images) {
+  const scene_estimation::EvaluateStageTimes& s = one.stages;
+  // MSSD and MSPD cost one transform of every vertex per symmetry transformation.
+  const std::vector<std::size_t> symmetries = symmetry_counts(workload.models_mm.size());
+  double point_transforms = 0;
+  for (int k = 0; k < images; ++k) {
+    for (const DenseObject& object : workload.images[dense_image_key(workload, k).source]) {
+      point_transforms += static_cast<double>(workload.models_mm[object.model]->positions.size() *
+                                              symmetries[object.model]);
+    }
+  }
+  const Json scores = datasets::read_json(one.out / "scores.json").at("dense");
+  std::printf(
+      "evaluated: %ld estimates (%ld estimate-GT pairs) in %ld images; AR_VSD %.3f, AR_MSSD "
+      "%.3f, AR_MSPD %.3f\n",
+      s.estimates, s.pairs, s.images, scores.at("bop19_average_recall_vsd").get<double>(),
+      scores.at("bop19_average_recall_mssd").get<double>(),
+      scores.at("bop19_average_recall_mspd").get<double>());
+  std::printf("time per estimate, --jobs 1 (ms)\n");
+  std::printf("  VSD    %8.2f  (%.2f renders per estimate, GT included; %ld pairs 1 unrendered)\n",
+              per_estimate_ms(s.vsd_s, s.estimates),
+              static_cast<double>(s.vsd_renders) / std::max(1L, s.estimates), s.vsd_skipped_pairs);
+  std::printf("  MSSD   %8.2f  (%.2f ns per vertex and symmetry transformation)\n",
+              per_estimate_ms(s.mssd_s, s.estimates), 1e9 * s.mssd_s / point_transforms);
+  std::printf("  MSPD   %8.2f  (%.2f ns per vertex and symmetry transformation)\n",
+              per_estimate_ms(s.mspd_s, s.estimates), 1e9 * s.mspd_s / point_transforms);
+  std::printf("  load   %8.2f  (GT, scene_gt_info, depth image: %.2f ms per image)\n",
+              per_estimate_ms(s.load_s, s.estimates), per_estimate_ms(s.load_s, s.images));
+  const double rest = one.item_seconds - s.load_s - s.vsd_s - s.mssd_s - s.mspd_s;
+  std::printf("  rest   %8.2f  (of the per-image work: input digests, rows, parts)\n",
+              per_estimate_ms(rest, s.estimates));
+  std::printf(
+      "  outside%8.2f  (not per image: set-up, the worker's context and models, scores and "
+      "final files)\n",
+      per_estimate_ms(one.seconds - one.item_seconds, s.estimates));
+  std::printf("  total  %8.2f  (wall time of the whole evaluation / estimates evaluated)\n",
+              per_estimate_ms(one.seconds, s.estimates));
+}
+
 void run_bench_evaluate(const BenchEvaluateArguments& arguments) {
   DenseWorkloadOptions options = arguments.workload;
   options.min_objects = options.max_objects = arguments.objects;
@@ -228,9 +275,11 @@ void run_bench_evaluate(const BenchEvaluateArguments& arguments) {
   if (arguments.images < 1 || options.images < 1 || options.models < 2 || arguments.objects < 1 ||
       arguments.objects > options.models || options.min_triangles < 20 ||
       options.max_triangles < options.min_triangles || options.width < 8 || options.height < 8 ||
-      arguments.jobs < 1 || arguments.estimates_per_object < 1 || arguments.full_frame_images < 0) {
+      arguments.jobs < 1 || arguments.estimates_per_object < 1 || arguments.rounds < 1 ||
+      arguments.full_frame_images < 0) {
     throw batch::UsageError(
-        "bench evaluate: --images, --distinct-images, --estimates-per-object, --jobs >= 1, "
+        "bench evaluate: --images, --distinct-images, --estimates-per-object, --jobs, --rounds "
+        ">= 1, "
         "--models >= 2, 1 <= --objects <= --models, 20 <= --triangles-min <= --triangles-max, "
         "--width/--height >= 8, --full-frame-images >= 0");
   }
@@ -282,80 +331,74 @@ void run_bench_evaluate(const BenchEvaluateArguments& arguments) {
               in_file, arguments.estimates_per_object);
   std::fflush(stdout);
 
-  // The whole evaluation at --jobs 1 and --jobs N, one after the other.
+  // The whole evaluation at --jobs 1 and --jobs N, one after the other, in each round; the
+  // time per estimate of each error from the first round's --jobs 1.
   const std::vector<std::string> all = {"vsd", "mssd", "mspd"};
-  const double load_before = load_average();
-  const EvaluateRun one = run_evaluation(root, results, root / "out_jobs_1", 1, all, "", true);
-  const EvaluateRun many =
-      run_evaluation(root, results, root / "out_jobs_n", arguments.jobs, all, "", true);
-  const double load_after = load_average();
-  const scene_estimation::EvaluateStageTimes& s = one.stages;
-  const bool same =
-      datasets::read_file(one.out / "errors.csv") == datasets::read_file(many.out / "errors.csv") &&
-      datasets::read_file(one.out / "scores.json") == datasets::read_file(many.out / "scores.json");
-  // MSSD and MSPD cost one transform of every vertex per symmetry transformation.
-  const std::vector<std::size_t> symmetries = symmetry_counts(workload.models_mm.size());
-  double point_transforms = 0;
-  for (int k = 0; k < arguments.images; ++k) {
-    for (const DenseObject& object : workload.images[dense_image_key(workload, k).source]) {
-      point_transforms += static_cast<double>(workload.models_mm[object.model]->positions.size() *
-                                              symmetries[object.model]);
+  std::vector<double> ratios;
+  bool same = true;
+  std::string reference_errors, reference_scores;
+  for (int round = 1; round <= arguments.rounds; ++round) {
+    const std::string suffix = "_" + std::to_string(round);
+    const double load_before = load_average();
+    const EvaluateRun one =
+        run_evaluation(root, results, root / ("out_jobs_1" + suffix), 1, all, "", true);
+    const EvaluateRun many = run_evaluation(root, results, root / ("out_jobs_n" + suffix),
+                                            arguments.jobs, all, "", true);
+    const double load_after = load_average();
+    for (const EvaluateRun* run : {&one, &many}) {
+      const std::string errors = datasets::read_file(run->out / "errors.csv");
+      const std::string scores = datasets::read_file(run->out / "scores.json");
+      if (reference_errors.empty()) {
+        reference_errors = errors;
+        reference_scores = scores;
+      }
+      same = same && errors == reference_errors && scores == reference_scores;
     }
+    if (round == 1) print_breakdown(one, workload, arguments.images);
+    ratios.push_back(one.seconds / many.seconds);
+    std::printf(
+        "round %d: --jobs 1 %.2f s, --jobs %d %.2f s, ratio %.2f; cores busy %.2f and %.2f, CPU "
+        "time %.2f and %.2f s; machine load average %.2f before, %.2f after\n",
+        round, one.seconds, arguments.jobs, many.seconds, ratios.back(),
+        one.cpu_seconds / one.seconds, many.cpu_seconds / many.seconds, one.cpu_seconds,
+        many.cpu_seconds, load_before, load_after);
+    std::fflush(stdout);
   }
-  const Json scores = datasets::read_json(one.out / "scores.json").at("dense");
   std::printf(
-      "evaluated: %ld estimates (%ld estimate-GT pairs) in %ld images; AR_VSD %.3f, AR_MSSD "
-      "%.3f, AR_MSPD %.3f\n",
-      s.estimates, s.pairs, s.images, scores.at("bop19_average_recall_vsd").get<double>(),
-      scores.at("bop19_average_recall_mssd").get<double>(),
-      scores.at("bop19_average_recall_mspd").get<double>());
-  std::printf("time per estimate, --jobs 1 (ms)\n");
-  std::printf("  VSD    %8.2f  (%.2f renders per estimate, GT included; %ld pairs 1 unrendered)\n",
-              per_estimate_ms(s.vsd_s, s.estimates),
-              static_cast<double>(s.vsd_renders) / std::max(1L, s.estimates), s.vsd_skipped_pairs);
-  std::printf("  MSSD   %8.2f  (%.2f ns per vertex and symmetry transformation)\n",
-              per_estimate_ms(s.mssd_s, s.estimates), 1e9 * s.mssd_s / point_transforms);
-  std::printf("  MSPD   %8.2f  (%.2f ns per vertex and symmetry transformation)\n",
-              per_estimate_ms(s.mspd_s, s.estimates), 1e9 * s.mspd_s / point_transforms);
-  std::printf("  load   %8.2f  (GT, scene_gt_info, depth image: %.2f ms per image)\n",
-              per_estimate_ms(s.load_s, s.estimates), per_estimate_ms(s.load_s, s.images));
-  const double rest = one.item_seconds - s.load_s - s.vsd_s - s.mssd_s - s.mspd_s;
-  std::printf("  rest   %8.2f  (of the per-image work: input digests, rows, parts)\n",
-              per_estimate_ms(rest, s.estimates));
-  std::printf(
-      "  outside%8.2f  (not per image: set-up, the worker's context and models, scores and "
-      "final files)\n",
-      per_estimate_ms(one.seconds - one.item_seconds, s.estimates));
-  std::printf("  total  %8.2f  (wall time of the whole evaluation / estimates evaluated)\n",
-              per_estimate_ms(one.seconds, s.estimates));
-  std::printf(
-      "whole evaluation (wall): --jobs 1 %.2f s, --jobs %d %.2f s: --jobs %d / --jobs 1 = %.2f "
-      "(target >= 1.7); cores busy %.2f and %.2f, CPU time %.2f and %.2f s; machine load "
-      "average %.2f before, %.2f after; outputs identical: %s\n",
-      one.seconds, arguments.jobs, many.seconds, arguments.jobs, one.seconds / many.seconds,
-      one.cpu_seconds / one.seconds, many.cpu_seconds / many.seconds, one.cpu_seconds,
-      many.cpu_seconds, load_before, load_after, same ? "yes" : "NO");
+      "whole evaluation (wall): --jobs %d / --jobs 1 = %.2f (median of %d rounds; target >= "
+      "1.7); outputs identical: %s\n",
+      arguments.jobs, median_of(ratios), arguments.rounds, same ? "yes" : "NO");
   std::fflush(stdout);
 
   if (arguments.full_frame_images == 0) return;
   // VSD alone on the first images, each pose rendered on its window and on the whole image.
   const int compared = std::min(arguments.full_frame_images, arguments.images);
   const std::string selection = "0-" + std::to_string(std::min(compared, 100) - 1);
-  const EvaluateRun window =
-      run_evaluation(root, results, root / "out_vsd_window", 1, {"vsd"}, selection, true);
-  const EvaluateRun whole =
-      run_evaluation(root, results, root / "out_vsd_whole", 1, {"vsd"}, selection, false);
-  const double window_ms = per_estimate_ms(window.stages.vsd_s, window.stages.estimates);
-  const double whole_ms = per_estimate_ms(whole.stages.vsd_s, whole.stages.estimates);
-  std::printf(
-      "VSD per estimate, --jobs 1, %ld estimates of scene 1 images %s: on each pose's window "
-      "%.2f ms, on the whole image (as bop_toolkit renders) %.2f ms: whole / window = %.2f; "
-      "errors identical: %s\n",
-      window.stages.estimates, selection.c_str(), window_ms, whole_ms, whole_ms / window_ms,
-      datasets::read_file(window.out / "errors.csv") ==
-              datasets::read_file(whole.out / "errors.csv")
-          ? "yes"
-          : "NO");
+  std::vector<double> vsd_ratios;
+  for (int round = 1; round <= arguments.rounds; ++round) {
+    const std::string suffix = "_" + std::to_string(round);
+    const EvaluateRun window = run_evaluation(root, results, root / ("out_vsd_window" + suffix), 1,
+                                              {"vsd"}, selection, true);
+    const EvaluateRun whole = run_evaluation(root, results, root / ("out_vsd_whole" + suffix), 1,
+                                             {"vsd"}, selection, false);
+    const double window_ms = per_estimate_ms(window.stages.vsd_s, window.stages.estimates);
+    const double whole_ms = per_estimate_ms(whole.stages.vsd_s, whole.stages.estimates);
+    vsd_ratios.push_back(whole_ms / window_ms);
+    std::printf(
+        "VSD per estimate, --jobs 1, %ld estimates of scene 1 images %s: on each pose's window "
+        "%.2f ms, on the whole image (as bop_toolkit renders) %.2f ms: whole / window = %.2f; "
+        "errors identical: %s\n",
+        window.stages.estimates, selection.c_str(), window_ms, whole_ms, vsd_ratios.back(),
+        datasets::read_file(window.out / "errors.csv") ==
+                datasets::read_file(whole.out / "errors.csv")
+            ? "yes"
+            : "NO");
+    std::fflush(stdout);
+  }
+  if (arguments.rounds > 1) {
+    std::printf("VSD whole / window: median %.2f of %d rounds\n", median_of(vsd_ratios),
+                arguments.rounds);
+  }
   std::fflush(stdout);
 }
 
@@ -396,6 +439,10 @@ void add_bench_evaluate_command(CLI::App& app, int* exit_code) {
   command->add_option("--jobs,-j", arguments->jobs, "workers of the run compared with --jobs 1")
       ->capture_default_str();
   command->add_option("--seed", workload.seed, "workload seed")->capture_default_str();
+  command
+      ->add_option("--rounds", arguments->rounds,
+                   "rounds of the --jobs and the whole-image comparisons (medians printed)")
+      ->capture_default_str();
   command
       ->add_option("--full-frame-images", arguments->full_frame_images,
                    "images of the VSD comparison on whole images (at most 100); 0 skips it")
