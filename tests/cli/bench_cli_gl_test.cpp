@@ -143,6 +143,8 @@ TEST(BenchCliGl, EvaluatePrintsTheTimePerEstimateOfEachErrorAndTheJobsRatio) {
     EXPECT_GE(ns, 0.0) << line;
   }
   EXPECT_GT(number_after(run.output, "--jobs 2 / --jobs 1 = "), 0.0) << run.output;
+  EXPECT_GT(number_after(run.output, "(--jobs 1 CPU time / --jobs 2 wall time) "), 0.0)
+      << run.output;
   EXPECT_GT(number_after(run.output, "whole / window = "), 0.0) << run.output;
   // Both comparisons run the same evaluation two ways: the outputs agree byte for byte.
   EXPECT_NE(run.output.find("outputs identical: yes"), std::string::npos) << run.output;
