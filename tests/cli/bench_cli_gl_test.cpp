@@ -145,6 +145,14 @@ TEST(BenchCliGl, EvaluatePrintsTheTimePerEstimateOfEachErrorAndTheJobsRatio) {
   EXPECT_GT(number_after(run.output, "--jobs 2 / --jobs 1 = "), 0.0) << run.output;
   EXPECT_GT(number_after(run.output, "(--jobs 1 CPU time / --jobs 2 wall time) "), 0.0)
       << run.output;
+  const std::size_t wanted = run.output.find(", wanted ");
+  ASSERT_NE(wanted, std::string::npos) << run.output;
+  double wanted_one = NAN, wanted_many = NAN;
+  EXPECT_EQ(
+      std::sscanf(run.output.c_str() + wanted, ", wanted %lf and %lf", &wanted_one, &wanted_many),
+      2)
+      << run.output;
+  EXPECT_GE(wanted_many, 0.0) << run.output;
   EXPECT_GT(number_after(run.output, "whole / window = "), 0.0) << run.output;
   // Both comparisons run the same evaluation two ways: the outputs agree byte for byte.
   EXPECT_NE(run.output.find("outputs identical: yes"), std::string::npos) << run.output;

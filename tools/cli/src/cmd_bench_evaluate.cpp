@@ -9,6 +9,8 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/datasets/bop.hpp>
@@ -27,6 +29,8 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <thread>
+#include <utility>
 #include <vector>
 
 #include "bench_dense_workload.hpp"
@@ -170,10 +174,65 @@ long write_results(const DenseWorkload& workload, int image_count, int per_objec
   return count;
 }
 
+// The time the process's threads were runnable (running, or waiting for a core: Linux's
+// /proc/self/task/TID/schedstat), sampled every 20 ms (a thread's last 20 ms may be missed):
+// runnable seconds / wall seconds is the cores a run wanted, more than it got on a shared
+// machine.
+class RunnableTime {
+ public:
+  RunnableTime() : sampler_([this] { sample_until_stopped(); }) {}
+  ~RunnableTime() { stop(); }
+  RunnableTime(const RunnableTime&) = delete;
+  RunnableTime& operator=(const RunnableTime&) = delete;
+  // Stops sampling; the runnable seconds of every thread but the sampler since the start.
+  double stop() {
+    if (sampler_.joinable()) {
+      stopped_ = true;
+      sampler_.join();
+    }
+    double total = 0;
+    for (const auto& [tid, span] : seen_)
+      total += 1e-9 * static_cast<double>(span.second - span.first);
+    return total;
+  }
+
+ private:
+  void sample_until_stopped() {
+    const std::string self = std::to_string(::gettid());
+    for (;;) {
+      const bool last = stopped_;  // one more sample after stop()
+      std::error_code error;
+      for (const fs::directory_entry& task : fs::directory_iterator("/proc/self/task", error)) {
+        const std::string tid = task.path().filename().string();
+        if (tid == self) continue;
+        std::FILE* file = std::fopen((task.path() / "schedstat").c_str(), "r");
+        if (file == nullptr) continue;
+        unsigned long long run = 0, wait = 0;
+        if (std::fscanf(file, "%llu %llu", &run, &wait) == 2) {
+          const auto found = seen_.find(tid);
+          if (found == seen_.end()) {
+            seen_.emplace(tid, std::make_pair(run + wait, run + wait));
+          } else {
+            found->second.second = run + wait;
+          }
+        }
+        std::fclose(file);
+      }
+      if (last) return;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+  }
+
+  std::map<std::string, std::pair<unsigned long long, unsigned long long>> seen_;
+  std::atomic<bool> stopped_{false};
+  std::thread sampler_;  // last: starts after the members it uses
+};
+
 struct EvaluateRun {
-  double seconds = 0;       // wall time of the whole job, set-up and final files included
-  double cpu_seconds = 0;   // the process's CPU time meanwhile
-  double item_seconds = 0;  // the per-image function's time, summed over the images
+  double seconds = 0;           // wall time of the whole job, set-up and final files included
+  double cpu_seconds = 0;       // the process's CPU time meanwhile
+  double item_seconds = 0;      // the per-image function's time, summed over the images
+  double runnable_seconds = 0;  // RunnableTime over the run
   scene_estimation::EvaluateStageTimes stages;
   fs::path out;
 };
@@ -200,7 +259,9 @@ EvaluateRun run_evaluation(const fs::path& root, const fs::path& results, const 
   options.stage_times = &run.stages;
   const BenchClock::time_point start = BenchClock::now();
   const double cpu_start = process_cpu_seconds();
+  RunnableTime runnable;
   const batch::BatchResult result = scene_estimation::run_evaluate_job(options);
+  run.runnable_seconds = runnable.stop();
   run.seconds = seconds_since(start);
   run.item_seconds = result.seconds_per_item * static_cast<double>(result.computed);
   run.cpu_seconds = process_cpu_seconds() - cpu_start;
@@ -361,11 +422,13 @@ void run_bench_evaluate(const BenchEvaluateArguments& arguments) {
     // ratio where other processes share the cores.
     bounds.push_back(one.cpu_seconds / many.seconds);
     std::printf(
-        "round %d: --jobs 1 %.2f s, --jobs %d %.2f s, ratio %.2f; cores busy %.2f and %.2f, CPU "
-        "time %.2f and %.2f s; machine load average %.2f before, %.2f after; --jobs 1 CPU time "
-        "/ --jobs %d wall time %.2f\n",
+        "round %d: --jobs 1 %.2f s, --jobs %d %.2f s, ratio %.2f; cores busy %.2f and %.2f, "
+        "wanted %.2f and %.2f (threads running or waiting for a core); CPU time %.2f and %.2f "
+        "s; machine load average %.2f before, %.2f after; --jobs 1 CPU time / --jobs %d wall "
+        "time %.2f\n",
         round, one.seconds, arguments.jobs, many.seconds, ratios.back(),
-        one.cpu_seconds / one.seconds, many.cpu_seconds / many.seconds, one.cpu_seconds,
+        one.cpu_seconds / one.seconds, many.cpu_seconds / many.seconds,
+        one.runnable_seconds / one.seconds, many.runnable_seconds / many.seconds, one.cpu_seconds,
         many.cpu_seconds, load_before, load_after, arguments.jobs, bounds.back());
     std::fflush(stdout);
   }
