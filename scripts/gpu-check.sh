@@ -2,7 +2,8 @@
 # Checks clutterscope on an NVIDIA GPU (issue 16): builds a Release build in build-gpu/ (the
 # clutterscope executable and the GL test executables only), selects the NVIDIA EGL device,
 # prints GL_RENDERER, runs `bench visibility` (default and --dense), `bench estimate` (the tiled
-# against one-by-one scoring ratio) and the GL tests, teeing everything into a log. Fails when
+# against one-by-one scoring ratio), `bench evaluate` and the GL tests, teeing everything into a
+# log. Fails when
 # an NVIDIA device exists but rendering runs on a software rasteriser, and when any step fails
 # (the other steps still run). On a machine without an NVIDIA GPU it says so and runs everything
 # on the renderer it finds. About 5 minutes on 16 cores.
@@ -200,6 +201,9 @@ main() {
       --images 2 --models 3 --triangles-min 2000 --triangles-max 4000 --job-images 20
     step "bench estimate" timeout "$bench_timeout" "$binary" bench estimate "$tray10" --images 1 \
       --particles 10 --iterations 1 --particles-list 8,10 --rounds 2
+    step "bench evaluate" timeout "$bench_timeout" "$binary" bench evaluate --images 4 \
+      --distinct-images 2 --objects 2 --models 3 --triangles-min 2000 --triangles-max 3000 \
+      --full-frame-images 2
     step "GL tests" timeout "$tests_timeout" ctest --test-dir "$build" -L gl -j"$(nproc)" \
       --output-on-failure --timeout 240 \
       -R '^(ContextGl|RendererGl|BopRendererGl|VisibilityGl|Modes/VisibilityBopToolkit|EmbreeReference|EmbreeReferenceGl)\.'
@@ -208,6 +212,7 @@ main() {
     step "bench visibility --dense" timeout "$bench_timeout" "$binary" bench visibility --dense
     step "bench estimate" timeout "$bench_timeout" "$binary" bench estimate "$tray10" --images 2 \
       --particles-list 50,100 --rounds 5
+    step "bench evaluate" timeout "$bench_timeout" "$binary" bench evaluate
     step "GL tests" timeout "$tests_timeout" ctest --test-dir "$build" -L gl -j"$(nproc)" \
       --output-on-failure --timeout 240
   fi

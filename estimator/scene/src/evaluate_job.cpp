@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <chrono>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/input_digest.hpp>
 #include <clutterscope/batch/run_record.hpp>
@@ -27,6 +28,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <string>
@@ -130,6 +132,17 @@ void require_scene_gt_info(const datasets::BopDataset& dataset, const std::strin
   }
 }
 
+// Adds the seconds since `start` to *seconds and returns now.
+using StageClock = std::chrono::steady_clock;
+StageClock::time_point add_elapsed(StageClock::time_point start, double* seconds) {
+  const StageClock::time_point now = StageClock::now();
+  *seconds += std::chrono::duration<double>(now - start).count();
+  return now;
+}
+
+// Guards the EvaluateStageTimes the workers add theirs to.
+std::mutex stage_times_mutex;
+
 class EvaluateWorker {
  public:
   // vsd: VSD's options when VSD is computed; the worker then renders on its own context.
@@ -143,7 +156,8 @@ class EvaluateWorker {
         symmetries_(symmetries),
         mssd_(has(job.errors, "mssd")),
         mspd_(has(job.errors, "mspd")),
-        vsd_options_(vsd) {
+        vsd_options_(vsd),
+        stage_times_(job.stage_times) {
     if (vsd_options_) {
       context_.emplace(render::EglContext::create());
       // VSD's own renderer (bop_vsd.hpp): it draws on an image-sized target.
@@ -151,7 +165,17 @@ class EvaluateWorker {
     }
   }
 
+  ~EvaluateWorker() {
+    if (stage_times_ == nullptr) return;
+    const std::lock_guard<std::mutex> lock(stage_times_mutex);
+    stage_times_->add(times_);
+  }
+  EvaluateWorker(const EvaluateWorker&) = delete;
+  EvaluateWorker& operator=(const EvaluateWorker&) = delete;
+
   batch::ItemOutput run(const datasets::ImageKey& key) {
+    const StageClock::time_point start = StageClock::now();
+    ++times_.images;
     const datasets::SceneView view = dataset_.load(key);
     const std::vector<double>& visib_fract = visib_fract_of(key, view);
     const std::map<int, int>& targets = targets_.images.at({key.scene_id, key.im_id});
@@ -174,6 +198,7 @@ class EvaluateWorker {
                                                view.camera.width, view.camera.height, where);
       vsd_image.emplace(*renderer_, depth_mm, view.camera.K, *vsd_options_);
     }
+    add_elapsed(start, &times_.load_s);
 
     Json gt_json = Json::array(), targets_json = Json::array(), files_json = Json::array();
     for (const auto& instance : gt) gt_json.push_back({instance.obj_id, instance.visib_fract});
@@ -182,6 +207,10 @@ class EvaluateWorker {
     for (const ResultsFile& file : files_) {
       files_json.push_back(evaluate_file(file, key, view, gt, valid, targets,
                                          vsd_image ? &*vsd_image : nullptr, &rows));
+    }
+    if (vsd_image) {
+      times_.vsd_renders += vsd_image->renders();
+      times_.vsd_skipped_pairs += vsd_image->skipped_pairs();
     }
     batch::ItemOutput output;
     output.tables = {rows};
@@ -218,6 +247,7 @@ class EvaluateWorker {
       const ModelData& model = model_data(obj_id);
       for (const int est_id : estimator::bop_top_estimates(scores, inst_count)) {
         const datasets::PoseEstimate& estimate = *estimates[est_id];
+        ++times_.estimates;
         Json gt_ids = Json::array(), mssd = Json::array(), mspd = Json::array();
         Json vsd_values = Json::array();
         for (std::size_t k = 0; k < view.objects.size(); ++k) {
@@ -229,21 +259,26 @@ class EvaluateWorker {
           row.add(file.name).add(key.scene_id).add(key.im_id).add(obj_id).add(est_id);
           row.add(static_cast<int>(k)).add(batch::format_shortest(estimate.score));
           row.add(batch::format_shortest(gt[k].visib_fract)).add(valid[k] ? "1" : "0");
+          ++times_.pairs;
+          StageClock::time_point start = StageClock::now();
           if (mssd_) {
             mssd_m = estimator::bop_mssd(estimate.model_to_camera, pose, model.points,
                                          model.symmetries, model.diameter_m);
             mssd.push_back(error_json(mssd_m / model.diameter_m));
+            start = add_elapsed(start, &times_.mssd_s);
           }
           if (mspd_) {
             mspd_px = estimator::mspd(estimate.model_to_camera, pose, view.camera.K, model.points,
                                       model.symmetries);
             mspd.push_back(error_json(mspd_px * width_factor));
+            start = add_elapsed(start, &times_.mspd_s);
           }
           if (vsd_image != nullptr) {
             // VSD in the model file's millimetres, as bop_toolkit renders.
             vsd = vsd_image->vsd(gpu_model(obj_id), model.diameter_m * 1000.0,
                                  pose_mm(estimate.model_to_camera), pose_mm(pose));
             vsd_values.push_back(vsd);
+            add_elapsed(start, &times_.vsd_s);
           }
           // Empty: not computed (not in --errors, or MSSD's centres a diameter or more apart,
           // which bop_toolkit records as inf) or not finite (an MSPD through depth 0).
@@ -325,6 +360,8 @@ class EvaluateWorker {
   const std::map<int, datasets::ModelSymmetries>& symmetries_;
   const bool mssd_, mspd_;
   const std::optional<BopVsdOptions> vsd_options_;
+  EvaluateStageTimes* const stage_times_;
+  EvaluateStageTimes times_;  // this worker's, added to *stage_times_ at its end
   std::map<int, ModelData> models_;
   // Destroyed before the context they live in (members go in reverse order).
   std::optional<render::EglContext> context_;
@@ -848,6 +885,18 @@ std::vector<std::string> resolve_errors(const EvaluateJobOptions& options,
 
 }  // namespace
 
+void EvaluateStageTimes::add(const EvaluateStageTimes& other) {
+  load_s += other.load_s;
+  vsd_s += other.vsd_s;
+  mssd_s += other.mssd_s;
+  mspd_s += other.mspd_s;
+  images += other.images;
+  estimates += other.estimates;
+  pairs += other.pairs;
+  vsd_renders += other.vsd_renders;
+  vsd_skipped_pairs += other.vsd_skipped_pairs;
+}
+
 bool EvaluateJobOptions::IsValid(std::string* why) const {
   if (results.empty()) {
     *why = "--results: at least one BOP results file (scene_id,im_id,obj_id,score,R,t,time)";
@@ -969,6 +1018,7 @@ batch::BatchResult evaluate(const EvaluateJobOptions& options, bool check_only) 
   if (vsd) {
     vsd_options.emplace();
     vsd_options->delta_mm = vsd_delta_mm(job_options);
+    vsd_options->render_windows = job_options.vsd_render_windows;
   }
   if (check_only) {
     // The run finds a missing scene_gt_info.json per image (a failed image under --keep-going);

@@ -6,19 +6,16 @@
 // visibility command itself on a dense dataset written to a temporary folder, for its --jobs
 // scaling and its peak memory at two dataset sizes.
 
-#include <cstdint>
 #include <string>
+
+#include "bench_dense_workload.hpp"
 
 namespace clutterscope::cli {
 
-struct DenseBenchArguments {
-  int images = 24;  // distinct images of the in-process measurements
-  int models = 10;
-  int min_objects = 6, max_objects = 10;              // per image
-  int min_triangles = 30000, max_triangles = 100000;  // per model
-  int width = 640, height = 480;
+// The workload (bench_dense_workload.hpp; images: the distinct images of the in-process
+// measurements) and how the benchmark runs.
+struct DenseBenchArguments : DenseWorkloadOptions {
   int jobs = 2;
-  std::uint64_t seed = 20261202;
   bool per_image = false;
   // The visibility command on a written dataset: a run of job_images images and one of
   // job_images / 10 (their peak memory compared), and --jobs 1 against --jobs N on the smaller.

@@ -33,6 +33,7 @@ void add_commands(CLI::App& app, int* exit_code) {
   add_estimate_command(app, exit_code);
   add_bench_estimate_command(app, exit_code);
   add_evaluate_command(app, exit_code);
+  add_bench_evaluate_command(app, exit_code);
   add_bench_calibration_command(app, exit_code);
   add_report_command(app, exit_code);
   add_thresholds_command(app, exit_code);

@@ -61,6 +61,7 @@ void add_estimate_command(CLI::App& app, int* exit_code);
 void add_bench_estimate_command(CLI::App& app, int* exit_code);
 void add_evaluate_command(CLI::App& app, int* exit_code);
 void add_bench_calibration_command(CLI::App& app, int* exit_code);
+void add_bench_evaluate_command(CLI::App& app, int* exit_code);
 void add_report_command(CLI::App& app, int* exit_code);
 void add_thresholds_command(CLI::App& app, int* exit_code);
 void add_simulate_command(CLI::App& app, int* exit_code);

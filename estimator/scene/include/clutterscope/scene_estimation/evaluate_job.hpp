@@ -45,6 +45,21 @@ namespace clutterscope::scene_estimation {
 // The BOP 2019 test targets a dataset ships, used when --targets is not given.
 inline constexpr const char* kBop19TargetsFile = "test_targets_bop19.json";
 
+// Where the workers' time goes in one run, summed over the workers (`bench evaluate` prints
+// it): seconds of the worker threads and what they computed. Filled only when asked for
+// (EvaluateJobOptions::stage_times); the outputs do not change.
+struct EvaluateStageTimes {
+  double load_s = 0;  // the image's GT, scene_gt_info.json and (with VSD) depth image
+  double vsd_s = 0;   // VSD, renders of the GT and the estimates included
+  double mssd_s = 0, mspd_s = 0;
+  long images = 0;
+  long estimates = 0;  // evaluated estimates (the best inst_count per target)
+  long pairs = 0;      // (estimate, GT instance of its object) pairs, each with every error
+  long vsd_renders = 0;
+  long vsd_skipped_pairs = 0;  // VSD 1 without rendering (bop_toolkit's shortcut, windows apart)
+  void add(const EvaluateStageTimes& other);
+};
+
 // Everything the `evaluate` command's flags set.
 struct EvaluateJobOptions {
   // dataset.targets: the bop19 test-target list; empty: DATASET/test_targets_bop19.json.
@@ -70,6 +85,11 @@ struct EvaluateJobOptions {
   // visibility is also written against it into OUT/by_scene_visibility/ (the same files, their
   // visibility column scene_visibility). `report --results` sets it; empty: not joined.
   std::string scene_visibility_images;
+  // Not flags: for `bench evaluate`. VSD renders each pose on its window of the image (false:
+  // on the whole image, as bop_toolkit does; the same values), and when stage_times is set the
+  // workers add their times to it (it must outlive the run).
+  bool vsd_render_windows = true;
+  EvaluateStageTimes* stage_times = nullptr;
   // "--errors: unknown error 'add' ...", "results: two files named small.csv ...".
   bool IsValid(std::string* why) const;
 };
