@@ -158,7 +158,18 @@ std::vector<PoseEstimate> parse_bop_results(std::string_view text,
     const std::string_view line = text.substr(start, end - start);
     start = end + 1;
     if (line_number == 1) {
-      const std::string_view first = trimmed(line);
+      std::string_view first = trimmed(line);
+      // A UTF-8 byte-order mark, as spreadsheet programs write one: bop_toolkit skips a first
+      // line that contains the header, so the header after a mark is skipped too; a data line
+      // after it fails in bop_toolkit's int() and is refused here.
+      constexpr std::string_view kUtf8ByteOrderMark = "\xEF\xBB\xBF";
+      if (first.substr(0, kUtf8ByteOrderMark.size()) == kUtf8ByteOrderMark) {
+        first.remove_prefix(kUtf8ByteOrderMark.size());
+        if (trimmed(first) == kBopResultsHeader) continue;
+        throw DatasetError(path,
+                           "line 1: starts with a UTF-8 byte-order mark but is not the header " +
+                               std::string(kBopResultsHeader));
+      }
       if (first == kBopResultsHeader) continue;
       if (first.substr(0, 8) == "scene_id") {
         throw DatasetError(path, "line 1: header " + quoted(first) + ", expected " +

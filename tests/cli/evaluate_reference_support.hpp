@@ -65,6 +65,26 @@ inline void write_ycbv21_dataset(const std::filesystem::path& dir) {
   if (std::system(command.c_str()) != 0) throw std::runtime_error("failed: " + command);
 }
 
+// Writes the ycbv21 dataset to SCRATCH/ycbv (eval_bop19_pose.py's VSD delta for ycbv is 15 mm)
+// and evaluates the three reference results files on it into SCRATCH/out with 2 jobs and
+// `options` (e.g. "--errors mssd,mspd"); returns the output folder.
+inline std::filesystem::path evaluate_ycbv21(const std::filesystem::path& scratch,
+                                             const std::string& options) {
+  const std::filesystem::path dataset = scratch / "ycbv";
+  write_ycbv21_dataset(dataset);
+  std::string files;
+  for (const std::string& results : kEvaluateVariants) {
+    files += quoted(kYcbv21Reference / "results" / (results + ".csv")) + " ";
+  }
+  const std::filesystem::path out = scratch / "out";
+  const CommandRun run =
+      run_clutterscope("evaluate " + quoted(dataset) + " --targets " +
+                       quoted(kYcbv21Reference / "test_targets_bop19.json") + " --results " +
+                       files + "--out " + quoted(out) + " -q --jobs 2 " + options);
+  EXPECT_EQ(run.exit_code, 0) << run.errors;
+  return out;
+}
+
 // Largest deviations from bop_toolkit over one results file (NaN where not compared).
 struct ReferenceDeviations {
   int pairs = 0;               // (estimate, GT) pairs bop_toolkit evaluated

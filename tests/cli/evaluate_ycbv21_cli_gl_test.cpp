@@ -25,29 +25,15 @@ namespace clutterscope::cli {
 namespace {
 
 namespace fs = std::filesystem;
-using clutterscope::testing::CommandRun;
 using clutterscope::testing::kYcbv21Reference;
-using clutterscope::testing::quoted;
-using clutterscope::testing::run_clutterscope;
 using clutterscope::testing::ScratchDir;
 
 TEST(EvaluateYcbv21CliGl, AllErrorsAndAverageRecallsMatchBopToolkit) {
   std::string why;
   if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
   const ScratchDir scratch("evaluate_ycbv21_gl");
-  // Named ycbv: eval_bop19_pose.py's VSD delta for it is 15 mm.
-  const fs::path dataset = scratch.path() / "ycbv";
-  clutterscope::testing::write_ycbv21_dataset(dataset);
-  std::string files;
-  for (const std::string& results : clutterscope::testing::kEvaluateVariants) {
-    files += quoted(kYcbv21Reference / "results" / (results + ".csv")) + " ";
-  }
-  const fs::path out = scratch.path() / "out";
-  const CommandRun run =
-      run_clutterscope("evaluate " + quoted(dataset) + " --targets " +
-                       quoted(kYcbv21Reference / "test_targets_bop19.json") + " --results " +
-                       files + "--out " + quoted(out) + " -q --jobs 2");
-  ASSERT_EQ(run.exit_code, 0) << run.errors;
+  const fs::path out = clutterscope::testing::evaluate_ycbv21(scratch.path(), "");
+  ASSERT_FALSE(::testing::Test::HasFailure());
 
   for (const std::string& results : clutterscope::testing::kEvaluateVariants) {
     const clutterscope::testing::ReferenceDeviations worst =

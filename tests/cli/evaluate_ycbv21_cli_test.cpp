@@ -23,27 +23,14 @@ namespace clutterscope::cli {
 namespace {
 
 namespace fs = std::filesystem;
-using clutterscope::testing::CommandRun;
 using clutterscope::testing::kYcbv21Reference;
-using clutterscope::testing::quoted;
 using clutterscope::testing::read_text;
-using clutterscope::testing::run_clutterscope;
 using clutterscope::testing::ScratchDir;
 
 TEST(EvaluateYcbv21Cli, MssdMspdAndAverageRecallsMatchBopToolkit) {
   const ScratchDir scratch("evaluate_ycbv21");
-  const fs::path dataset = scratch.path() / "ycbv";
-  clutterscope::testing::write_ycbv21_dataset(dataset);
-  std::string files;
-  for (const std::string& results : clutterscope::testing::kEvaluateVariants) {
-    files += quoted(kYcbv21Reference / "results" / (results + ".csv")) + " ";
-  }
-  const fs::path out = scratch.path() / "out";
-  const CommandRun run =
-      run_clutterscope("evaluate " + quoted(dataset) + " --targets " +
-                       quoted(kYcbv21Reference / "test_targets_bop19.json") + " --results " +
-                       files + "--out " + quoted(out) + " -q --errors mssd,mspd --jobs 2");
-  ASSERT_EQ(run.exit_code, 0) << run.errors;
+  const fs::path out = clutterscope::testing::evaluate_ycbv21(scratch.path(), "--errors mssd,mspd");
+  ASSERT_FALSE(::testing::Test::HasFailure());
 
   for (const std::string& results : clutterscope::testing::kEvaluateVariants) {
     const clutterscope::testing::ReferenceDeviations worst =

@@ -65,6 +65,11 @@ TEST(BopResults, HeaderIsOptionalAndWindowsLineEndsAndSpacesAreAccepted) {
   EXPECT_EQ(plus[0].score, 0.5);
   EXPECT_EQ(plus[0].model_to_camera.translation().x(), 0.001);
   EXPECT_EQ(plus[0].time_s, 2.0);
+  // A UTF-8 byte-order mark before the header (spreadsheet programs write one): bop_toolkit
+  // skips a first line containing the header; before a data line its int() fails.
+  EXPECT_EQ(parse_bop_results("\xEF\xBB\xBF" + kHeader + plain, kFile).size(), 1u);
+  expect_mentions(parse_error("\xEF\xBB\xBF" + plain),
+                  {kFile.string(), "line 1", "byte-order mark"});
   // No final line break.
   EXPECT_EQ(parse_bop_results(kHeader + "0,1,8,0.5," + kQuarterTurn + ",1 2 3,2", kFile).size(),
             1u);

@@ -33,16 +33,6 @@ cv::Rect rect_of(const std::string& x, const std::string& y, const std::string& 
   return {std::stoi(x), std::stoi(y), std::stoi(w), std::stoi(h)};
 }
 
-// The estimator's clipped pixel box of a BOP bbox (scene_estimate.cpp's clip_box).
-cv::Rect clipped(const Eigen::Vector4d& bbox, int width, int height) {
-  const int x0 = std::max(0, static_cast<int>(std::floor(bbox[0])));
-  const int y0 = std::max(0, static_cast<int>(std::floor(bbox[1])));
-  const int x1 = std::min(width, static_cast<int>(std::ceil(bbox[0] + bbox[2])));
-  const int y1 = std::min(height, static_cast<int>(std::ceil(bbox[1] + bbox[3])));
-  if (x1 <= x0 || y1 <= y0) return {};
-  return {x0, y0, x1 - x0, y1 - y0};
-}
-
 TEST(FalsePositivesGl, NoConfidentEstimateIsAttachedToAFalsePositive) {
   std::string why;
   if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
@@ -88,7 +78,7 @@ TEST(FalsePositivesGl, NoConfidentEstimateIsAttachedToAFalsePositive) {
     // the usual detection criterion. The generator's true boxes are within 3% jitter of theirs.
     std::vector<cv::Rect> false_boxes;
     for (const datasets::Detection& detection : *view.detections) {
-      const cv::Rect box = clipped(detection.bbox, view.camera.width, view.camera.height);
+      const cv::Rect box = clip_box(detection.bbox, view.camera.width, view.camera.height);
       bool overlaps = false;
       for (const auto& [obj_id, whole, visible] : truth.at({key.scene_id, key.im_id}))
         overlaps |= obj_id == detection.obj_id &&

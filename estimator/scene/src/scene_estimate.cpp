@@ -29,16 +29,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// The box [x, x+w) x [y, y+h) of a BOP bbox clipped to the image; empty when outside.
-cv::Rect clip_box(const Eigen::Vector4d& bbox, int width, int height) {
-  const int x0 = std::max(0, static_cast<int>(std::floor(bbox[0])));
-  const int y0 = std::max(0, static_cast<int>(std::floor(bbox[1])));
-  const int x1 = std::min(width, static_cast<int>(std::ceil(bbox[0] + bbox[2])));
-  const int y1 = std::min(height, static_cast<int>(std::ceil(bbox[1] + bbox[3])));
-  if (x1 <= x0 || y1 <= y0) return {};
-  return {x0, y0, x1 - x0, y1 - y0};
-}
-
 }  // namespace
 
 std::string to_string(Observation observation) {

@@ -5,6 +5,7 @@
 // minimum and above 0. A box overlapping no object of its class (a false positive elsewhere in
 // the image) is unmatched: it never becomes an object's initial mixture or observation.
 
+#include <Eigen/Core>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -18,6 +19,10 @@ namespace clutterscope::scene_estimation {
 // the accuracy test's set (seed 11). The paper assumes every true detection is used; what the
 // rule excludes by default is a box beside its object.
 constexpr double kDefaultMinDetectionIou = 0.0;
+
+// The pixel box [x, x+w) x [y, y+h) of a BOP bbox (x, y, w, h) clipped to the image; empty when
+// outside.
+cv::Rect clip_box(const Eigen::Vector4d& bbox, int width, int height);
 
 // Intersection over union of two pixel rectangles; 0 when either is empty or they do not meet.
 double box_iou(const cv::Rect& a, const cv::Rect& b);
