@@ -17,7 +17,8 @@ set(CLUTTERSCOPE_LAYERS
   "estimator:"
   "scene_estimation:datasets,render,visibility,estimator,batch,report"
   "simulation:datasets,scene_estimation,report"
-  "cli:datasets,batch,notebooks_export,report,render,visibility,estimator,scene_estimation,simulation")
+  "jobs:datasets,batch,notebooks_export,report,render,visibility,estimator,scene_estimation,simulation"
+  "cli:datasets,batch,notebooks_export,report,render,visibility,estimator,scene_estimation,simulation,jobs")
 
 # Entries are "library:dependency,dependency".
 # The libraries whose transitive links must not contain the given targets.
