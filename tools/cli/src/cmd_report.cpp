@@ -1,21 +1,17 @@
-// `clutterscope report`: flags -> report::ReportJobOptions and the visibility and estimate
-// jobs' Options -> report::run_report (report/report_job.hpp), which calls the jobs bound here.
+// `clutterscope report`: flags -> jobs::ReportJobOptions and the visibility and estimate
+// jobs' Options -> jobs::bind_report_steps and jobs::run_report (jobs/report_job.hpp).
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <clutterscope/batch/formats.hpp>
-#include <clutterscope/batch/input_digest.hpp>
 #include <clutterscope/cli/dataset_options.hpp>
-#include <clutterscope/datasets/files.hpp>
-#include <clutterscope/render/renderer_in_use.hpp>
+#include <clutterscope/jobs/evaluate_job.hpp>
+#include <clutterscope/jobs/report_job.hpp>
 #include <clutterscope/report/evaluation.hpp>
-#include <clutterscope/report/report_job.hpp>
-#include <clutterscope/scene_estimation/evaluate_job.hpp>
 #include <filesystem>
 #include <iostream>
 #include <map>
 #include <memory>
-#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -64,7 +60,7 @@ const std::vector<StepOption>& step_options() {
   static const std::vector<StepOption> options = [] {
     std::vector<StepOption> list;
     VisibilityFlags visibility;
-    scene_estimation::EstimateJobOptions estimate;
+    jobs::EstimateJobOptions estimate;
     CLI::App visibility_app, estimate_app;
     add_visibility_options(visibility_app, &visibility);
     add_estimate_options(estimate_app, &estimate);
@@ -126,7 +122,7 @@ void append_dataset_layout_options(const DatasetOptions& dataset, std::vector<st
   if (!dataset.targets.empty()) line->insert(line->end(), {"--targets", dataset.targets});
 }
 
-void append_given(const report::GivenOptions& given, std::vector<std::string>* line) {
+void append_given(const jobs::GivenOptions& given, std::vector<std::string>* line) {
   for (const auto& [name, value] : given) {
     line->push_back(name);
     if (!value.empty()) line->push_back(value);
@@ -136,7 +132,7 @@ void append_given(const report::GivenOptions& given, std::vector<std::string>* l
 // The command line of one step as `clutterscope STEP` would take it: "STEP DATASET --out
 // DIR/STEP", the dataset selection, --jobs, --keep-going, --quiet and the given options; for
 // estimate also the report's threshold, seed and radius, which are the estimator's too.
-std::vector<std::string> step_command_line(const report::ReportJobOptions& options,
+std::vector<std::string> step_command_line(const jobs::ReportJobOptions& options,
                                            const std::string& step) {
   const DatasetOptions& dataset = options.dataset;
   std::vector<std::string> line = {
@@ -180,126 +176,31 @@ void parse_step_flags(const std::vector<std::string>& command_line,
   app.parse(reversed);
 }
 
-// The jobs' options from the report's flags, checked before either step starts, and the steps
-// bound to them.
-class BoundSteps {
- public:
-  // Parses and validates both steps' options and reads the dataset selection (its scenes,
-  // images, targets and detections), throwing before anything is written.
-  explicit BoundSteps(const report::ReportJobOptions& options) {
-    parse_step_flags(step_command_line(options, "estimate"), &add_estimate_options, &estimate_);
-    VisibilityFlags visibility;
-    parse_step_flags(step_command_line(options, "visibility"), &add_visibility_options,
-                     &visibility);
-    visibility_ = visibility.options();
-    // Both steps' bounds (the estimator's memory bounds among them) before the report folder
-    // is marked.
-    std::string why;
-    if (!visibility_.IsValid(&why) || !estimate_.IsValid(&why)) throw batch::UsageError(why);
-    datasets::BopDataset dataset = batch::open_dataset(options.dataset);
-    if (!estimate_.detections.empty() &&
-        estimate_.detections != scene_estimation::kSyntheticDetections) {
-      dataset.attach_detections(estimate_.detections);
-    }
-    batch::list_selected_images(dataset, options.dataset);
-    visibility_fingerprint_ = visibility::visibility_job_fingerprint(visibility_);
-    estimate_fingerprint_ = scene_estimation::estimate_job_fingerprint(estimate_, dataset);
-    if (!options.results.empty()) bind_evaluate(options);
+// The steps' options from the report's flags, each parsed by the step's own option definitions
+// (a bad value is the error `clutterscope STEP` gives); jobs::bind_report_steps checks them.
+jobs::ReportStepOptions parse_step_options(const jobs::ReportJobOptions& options) {
+  jobs::ReportStepOptions steps;
+  parse_step_flags(step_command_line(options, "estimate"), &add_estimate_options, &steps.estimate);
+  VisibilityFlags visibility;
+  parse_step_flags(step_command_line(options, "visibility"), &add_visibility_options, &visibility);
+  steps.visibility = visibility.options();
+  if (!options.results.empty()) {
+    EvaluateFlags evaluate;
+    parse_step_flags(step_command_line(options, "evaluate"), &add_evaluate_options, &evaluate);
+    steps.evaluate = evaluate.options();
   }
-
-  report::ReportSteps steps() const {
-    report::ReportSteps steps;
-    steps.renderer = render::renderer_in_use;
-    steps.visibility_options = visibility_fingerprint_;
-    steps.estimate_options = estimate_fingerprint_;
-    if (evaluate_) {
-      steps.evaluate_options = evaluate_fingerprint_;
-      steps.evaluate = [this](const std::filesystem::path& out,
-                              const std::filesystem::path& bundled_results,
-                              const std::filesystem::path& images_csv) {
-        scene_estimation::EvaluateJobOptions job = *evaluate_;
-        job.dataset.out = out.string();
-        job.results.push_back(bundled_results.string());
-        job.scene_visibility_images = images_csv.string();
-        return scene_estimation::run_evaluate_job(job);
-      };
-    }
-    steps.visibility = [this](const std::filesystem::path& out) {
-      visibility::VisibilityJobOptions job = visibility_;
-      job.dataset.out = out.string();
-      return visibility::run_visibility_job(job);
-    };
-    steps.estimate = [this](const std::filesystem::path& out) {
-      scene_estimation::EstimateJobOptions job = estimate_;
-      job.dataset.out = out.string();
-      return scene_estimation::run_estimate_job(job);
-    };
-    // The estimate step's options on one image, alone on one worker, quietly.
-    steps.beliefs = [this](const datasets::ImageKey& image, const std::filesystem::path& out) {
-      scene_estimation::EstimateJobOptions job = estimate_;
-      job.dataset.out = out.string();
-      job.dataset.scenes = std::to_string(image.scene_id);
-      job.dataset.images = std::to_string(image.im_id);
-      job.dataset.jobs = 1;
-      job.dataset.quiet = true;
-      job.save_beliefs = true;
-      return scene_estimation::run_estimate_job(job);
-    };
-    return steps;
-  }
-
- private:
-  // The evaluate step: its options parsed as `evaluate` parses them and every check evaluate
-  // makes before it computes (the results files line by line among them), so that bad input
-  // is refused before any step runs.
-  void bind_evaluate(const report::ReportJobOptions& options) {
-    EvaluateFlags flags;
-    parse_step_flags(step_command_line(options, "evaluate"), &add_evaluate_options, &flags);
-    scene_estimation::EvaluateJobOptions evaluate = flags.options();
-    std::string why;
-    if (!evaluate.IsValid(&why)) throw batch::UsageError(why);
-    nlohmann::json results = nlohmann::json::array();
-    for (const std::string& file : evaluate.results) {
-      const std::string name = std::filesystem::path(file).stem().string();
-      if (name == report::kBundledMethod) {
-        throw batch::UsageError("--results " + file + ": " + report::kBundledMethod +
-                                " is the name of the bundled estimator's results in the report; "
-                                "give the file another name");
-      }
-      results.push_back({{"name", name},
-                         {"xxh64", batch::format_hex64(batch::xxh64(datasets::read_file(file)))}});
-    }
-    scene_estimation::check_evaluate_job(evaluate);
-    std::vector<std::string> errors = evaluate.errors;
-    std::sort(errors.begin(), errors.end());
-    const report::ByVisibilityOptions& by_visibility = evaluate.by_visibility;
-    evaluate_fingerprint_ = {
-        {"results", results},
-        {"errors", errors},
-        {"vsd_delta_mm",
-         evaluate.vsd_delta_mm ? nlohmann::json(*evaluate.vsd_delta_mm) : nlohmann::json()},
-        {"band_edges", by_visibility.band_edges},
-        {"correct_metric", report::to_string(by_visibility.correct_metric)},
-        {"correct_threshold", by_visibility.correct_threshold},
-        {"min_precision", by_visibility.min_precision}};
-    evaluate_ = std::move(evaluate);
-  }
-
-  scene_estimation::EstimateJobOptions estimate_;
-  visibility::VisibilityJobOptions visibility_;
-  std::optional<scene_estimation::EvaluateJobOptions> evaluate_;
-  nlohmann::json visibility_fingerprint_, estimate_fingerprint_, evaluate_fingerprint_;
-};
+  return steps;
+}
 
 struct ReportCommandState {
-  report::ReportJobOptions options;
+  jobs::ReportJobOptions options;
   std::map<std::string, std::string> values;  // forwarded value options as typed
   std::map<std::string, bool> flags;
   bool no_notebook = false;
 };
 
 void run_report_command(CLI::App& command, ReportCommandState& state, int* exit_code) {
-  report::ReportJobOptions options = state.options;
+  jobs::ReportJobOptions options = state.options;
   options.notebook = !state.no_notebook;
   for (const StepOption& option : step_options()) {
     if (command.get_option(option.name)->count() == 0) continue;
@@ -320,9 +221,9 @@ void run_report_command(CLI::App& command, ReportCommandState& state, int* exit_
   std::string why;
   if (!options.IsValid(&why)) throw batch::UsageError(why);
   // Every option of both steps is checked before either step starts work.
-  const BoundSteps steps(options);
+  const jobs::ReportSteps steps = jobs::bind_report_steps(options, parse_step_options(options));
   // Each step's runner reports its computed and reused images on stderr (and in run.json).
-  const report::ReportRun run = report::run_report(options, steps.steps());
+  const jobs::ReportRun run = jobs::run_report(options, steps);
   if (run.shard_only) {
     std::cerr << run.console_summary;
   } else {
@@ -335,7 +236,7 @@ void run_report_command(CLI::App& command, ReportCommandState& state, int* exit_
 
 void add_report_command(CLI::App& app, int* exit_code) {
   auto state = std::make_shared<ReportCommandState>();
-  report::ReportJobOptions& options = state->options;
+  jobs::ReportJobOptions& options = state->options;
   CLI::App* command = app.add_subcommand(
       "report",
       "The clutter report of a dataset: runs visibility and estimation into DIR/visibility and "

@@ -5,9 +5,9 @@
 // DIR/visibility (their batch runners resume finished images and refuse a different job), then
 // joins and analyses their tables and writes the report files into DIR.
 //
-// The report library links no GL, so it does not call the jobs itself: the front end binds them
-// (ReportSteps, filled by the CLI from the flags with the jobs' Options structs), as COLMAP's
-// controllers receive their steps.
+// run_report calls its steps through ReportSteps, as COLMAP's controllers receive theirs:
+// bind_report_steps binds them to the jobs (the CLI and the Python module), the tests bind
+// fakes.
 //
 // The belief figures (paper Fig. 2 d-f, Fig. 3) need belief samples, which the estimate step
 // saves only with --save-beliefs: without it, the drawn images (choose_belief_images) are
@@ -27,16 +27,21 @@
 
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/dataset_selection.hpp>
+#include <clutterscope/jobs/estimate_job.hpp>
+#include <clutterscope/jobs/evaluate_job.hpp>
+#include <clutterscope/jobs/run_control.hpp>
+#include <clutterscope/jobs/visibility_job.hpp>
 #include <clutterscope/notebooks_export/notebook.hpp>
 #include <clutterscope/report/report.hpp>
 #include <filesystem>
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
-namespace clutterscope::report {
+namespace clutterscope::jobs {
 
 // Options given on the command line for one step, by option name ("--mode") with the value as
 // typed ("" for flags): what the front end forwards, so each step keeps its own defaults.
@@ -46,7 +51,7 @@ struct ReportJobOptions {
   batch::DatasetOptions dataset;  // out: the report folder
   // The variance threshold, the confidence radius and the seed are the estimate step's too, so
   // that "confident" and the random streams mean the same in DIR/estimate and in the report.
-  ReportOptions analysis;
+  report::ReportOptions analysis;
   bool notebook = true;  // also write DIR/clutter_report.ipynb
   // --results: BOP 2019 results files evaluated beside the bundled estimator's results_bop.csv
   // (method kBundledMethod, evaluation.hpp) by an evaluate step into DIR/evaluate, after the
@@ -84,6 +89,26 @@ struct ReportSteps {
   std::function<std::string()> renderer;
 };
 
+// The steps' own options, as a front end reads them (`clutterscope report` from the flags it
+// forwards to each step). bind_report_steps sets what the report owns: each step's dataset
+// selection (out: DIR/STEP), the estimate step's variance threshold, confidence radius and seed
+// (the report's analysis ones), the evaluate step's results files (ReportJobOptions::results)
+// and bootstrap seed.
+struct ReportStepOptions {
+  VisibilityJobOptions visibility;
+  EstimateJobOptions estimate;
+  EvaluateJobOptions evaluate;  // used with ReportJobOptions::results only
+};
+
+// The report's steps bound to the jobs with `steps`' options, run under `control` (each step's
+// progress under its name, one cancellation for all; results are not kept in memory: the report
+// reads its steps' tables). Checks both steps' options and reads the dataset selection (its
+// scenes, images, targets and detections) and, with --results, makes every check evaluate makes
+// (the results files line by line among them) before anything is written: throws
+// batch::UsageError, datasets::DatasetError.
+ReportSteps bind_report_steps(const ReportJobOptions& options, const ReportStepOptions& steps,
+                              const RunControl& control = {});
+
 // What one step did in this run.
 struct StepRun {
   std::string command;
@@ -96,7 +121,7 @@ struct StepRun {
 struct ReportRun {
   // estimate, visibility, evaluate (with --results), beliefs (the belief figures' images)
   std::vector<StepRun> steps;
-  ReportFiles files;
+  report::ReportFiles files;
   std::string console_summary;  // format_console_summary; for a shard, what to run next
   int exit_code = 0;            // 1 when images failed under --keep-going
   bool shard_only = false;      // --shard: the steps ran on the shard, no report files
@@ -150,4 +175,4 @@ ReportRun run_report(const ReportJobOptions& options, const ReportSteps& steps);
 // later run without --shard into the folder.
 batch::BatchResult merge_report_shards(const batch::MergeOptions& options);
 
-}  // namespace clutterscope::report
+}  // namespace clutterscope::jobs
