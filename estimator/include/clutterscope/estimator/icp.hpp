@@ -12,6 +12,7 @@
 // table in the detection box do not pull the fit. All points in one frame (metres).
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -47,6 +48,15 @@ struct IcpResult {
   bool too_few_correspondences = false;
 };
 
+// The point-to-plane residuals of observed points against the model at a fixed position, with
+// the correspondences of align: residual n . (p - m) per observed point (NaN where it has no
+// correspondence), the sum of n n^T over the matched points and their count.
+struct PlaneResiduals {
+  std::vector<double> residual_m;
+  Eigen::Matrix3d normal_information = Eigen::Matrix3d::Zero();
+  int matched = 0;
+};
+
 class TranslationIcp {
  public:
   // model_points: 3 x N surface points of the model, already rotated into the frame of the
@@ -66,7 +76,17 @@ class TranslationIcp {
   IcpResult align(const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& initial,
                   const Eigen::Matrix3Xd* observed_normals = nullptr) const;
 
+  // The residuals of every observed point at `position` (no refinement), e.g. every valid
+  // pixel of the box at the fused estimate, for the fit's information per pixel.
+  PlaneResiduals plane_residuals(const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& position,
+                                 const Eigen::Matrix3Xd* observed_normals = nullptr) const;
+
  private:
+  // The model point observed point i (query = point - position) corresponds to, if any.
+  bool correspond(const Eigen::Vector3d& query, const Eigen::Vector3d& position,
+                  const Eigen::Matrix3Xd* observed_normals, int i, uint32_t* nearest,
+                  double* distance_sq) const;
+
   struct Tree;
   std::unique_ptr<Tree> tree_;
   IcpOptions options_;

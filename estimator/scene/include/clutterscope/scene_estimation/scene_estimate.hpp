@@ -84,9 +84,12 @@ struct EstimateOptions {
   // 2 or 3 cm, even with back-face culling and normal checks, the fits of cans slid together onto
   // their neighbours, 2-3 cm off).
   double icp_max_distance_m = 0.01;
-  // Calibrated covariance (estimator::fused_covariance): depth noise is correlated over about
-  // this many pixels of a fit, and the fit's residual is taken at least min_residual_m.
-  double correlated_pixels = 3;
+  // The fit's information per valid pixel (estimator::pixel_information): image pixels whose
+  // depth errors are one. Unset: the sensor's matching window where the sensor is described
+  // (resolve_pixel_noise), else from the neighbour correlation of the fit's residuals
+  // (--correlated-pixels overrides both). Residual variances are taken at least
+  // min_residual_m^2.
+  std::optional<double> correlated_pixels;
   double min_residual_m = 0.0005;
   // Model misfit (estimator::model_misfit_covariance, added to every estimate's covariance):
   // per-axis sigmas of the offset (metres) and rotation (degrees) between the model and the
@@ -247,6 +250,17 @@ struct ModelMisfit {
 // Throws datasets::DatasetError for a malformed sensor.json.
 ModelMisfit resolve_model_misfit(const EstimateOptions& options,
                                  const datasets::BopDataset& dataset);
+
+// The per-pixel depth noise the fit's information assumes: with synthetic observations the
+// sensor's (options.sensor); else the dataset's sensor.json where it describes one (generated
+// datasets); else none (described false: real data, estimated from the fit's residuals).
+// `source` names which. Throws datasets::DatasetError for a malformed sensor.json.
+struct PixelNoiseSource {
+  datasets::DeclaredNoise noise;
+  std::string source;
+};
+PixelNoiseSource resolve_pixel_noise(const EstimateOptions& options,
+                                     const datasets::BopDataset& dataset);
 
 class SceneEstimator {
  public:
