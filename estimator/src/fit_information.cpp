@@ -96,22 +96,52 @@ Eigen::Matrix3d belief_bound(const GaussianMixture& belief) {
   return weighted + spread / ess;
 }
 
-Eigen::Matrix3d information_maximum(const Eigen::Matrix3d& belief_covariance,
-                                    const Eigen::Matrix3d& fit_information) {
+namespace {
+
+// B = L L^T and the eigen decomposition of L^T J L (the fit's information, belief-whitened).
+struct Whitened {
+  Eigen::Matrix3d l, u;
+  Eigen::Vector3d information;
+};
+
+Whitened whiten(const Eigen::Matrix3d& belief_covariance, const Eigen::Matrix3d& fit_information) {
   const Eigen::Matrix3d b = 0.5 * (belief_covariance + belief_covariance.transpose());
   const Eigen::LLT<Eigen::Matrix3d> cholesky(b);
   if (!b.allFinite() || cholesky.info() != Eigen::Success)
     throw std::invalid_argument("belief covariance is not positive definite");
   if (!fit_information.allFinite()) throw std::invalid_argument("fit information is not finite");
-  const Eigen::Matrix3d l = cholesky.matrixL();
-  const Eigen::Matrix3d whitened =
-      l.transpose() * (0.5 * (fit_information + fit_information.transpose())) * l;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(whitened);
+  Whitened w;
+  w.l = cholesky.matrixL();
+  const Eigen::Matrix3d j = 0.5 * (fit_information + fit_information.transpose());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(w.l.transpose() * j * w.l);
+  w.u = eigen.eigenvectors();
+  w.information = eigen.eigenvalues();
+  return w;
+}
+
+}  // namespace
+
+Eigen::Matrix3d information_maximum(const Eigen::Matrix3d& belief_covariance,
+                                    const Eigen::Matrix3d& fit_information) {
+  const Whitened w = whiten(belief_covariance, fit_information);
   const Eigen::Vector3d variances =
-      eigen.eigenvalues().unaryExpr([](double v) { return 1.0 / std::max(v, 1.0); });
-  const Eigen::Matrix3d u = eigen.eigenvectors();
-  Eigen::Matrix3d covariance = l * u * variances.asDiagonal() * u.transpose() * l.transpose();
+      w.information.unaryExpr([](double v) { return 1.0 / std::max(v, 1.0); });
+  const Eigen::Matrix3d covariance =
+      w.l * w.u * variances.asDiagonal() * w.u.transpose() * w.l.transpose();
   return 0.5 * (covariance + covariance.transpose());
+}
+
+Eigen::Vector3d information_maximum_mean(const Eigen::Vector3d& belief_mean,
+                                         const Eigen::Matrix3d& belief_covariance,
+                                         const Eigen::Vector3d& fit_mean,
+                                         const Eigen::Matrix3d& fit_information) {
+  const Whitened w = whiten(belief_covariance, fit_information);
+  const Eigen::Vector3d belief =
+      w.u.transpose() * w.l.triangularView<Eigen::Lower>().solve(belief_mean);
+  const Eigen::Vector3d fit = w.u.transpose() * w.l.triangularView<Eigen::Lower>().solve(fit_mean);
+  Eigen::Vector3d chosen;
+  for (int i = 0; i < 3; ++i) chosen[i] = w.information[i] >= 1.0 ? fit[i] : belief[i];
+  return w.l * w.u * chosen;
 }
 
 }  // namespace clutterscope::estimator

@@ -99,12 +99,14 @@ TranslationIcp::TranslationIcp(TranslationIcp&&) noexcept = default;
 TranslationIcp& TranslationIcp::operator=(TranslationIcp&&) noexcept = default;
 
 IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& initial,
-                                const Eigen::Matrix3Xd* observed_normals) const {
+                                const Eigen::Matrix3Xd* observed_normals,
+                                int max_iterations) const {
   if (observed_normals && observed_normals->cols() != observed.cols())
     throw std::invalid_argument("ICP needs one normal per observed point");
+  const int iterations = max_iterations > 0 ? max_iterations : options_.max_iterations;
   IcpResult result;
   result.position = initial;
-  for (int iteration = 0; iteration < options_.max_iterations; ++iteration) {
+  for (int iteration = 0; iteration < iterations; ++iteration) {
     // Point-to-plane with a small point-to-point term: sum (n n^T + mu I) (r - step) = 0, so
     // directions constrained by surfaces converge in a few steps and the others (constrained
     // only by edges) still move.
@@ -147,8 +149,8 @@ IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::V
 }
 
 bool TranslationIcp::correspond(const Eigen::Vector3d& query, const Eigen::Vector3d& position,
-                                const Eigen::Matrix3Xd* observed_normals, int i,
-                                uint32_t* nearest, double* distance_sq) const {
+                                const Eigen::Matrix3Xd* observed_normals, int i, uint32_t* nearest,
+                                double* distance_sq) const {
   const double max_sq = options_.max_correspondence_distance * options_.max_correspondence_distance;
   if (!query.allFinite()) return false;
   if (tree_->index.knnSearch(query.data(), 1, nearest, distance_sq) == 0) return false;

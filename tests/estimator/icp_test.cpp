@@ -197,6 +197,30 @@ TEST(Icp, NormalInformationOfAFlatFaceHasNoneAlongTheFace) {
   EXPECT_LT(fit.normal_information(1, 1), 0.05 * fit.correspondences);
 }
 
+TEST(Icp, PlaneResidualsAreTheOffsetAlongTheNormalAtAFixedPosition) {
+  // The face z = 0.05 of a box at position (0, 0, 0.002): every observed point of z = 0.05 is
+  // 2 mm behind the model's face along its normal +z, whatever its place on the face; a point
+  // 5 cm off any surface has no correspondence.
+  std::mt19937_64 rng(5);
+  const TranslationIcp icp(box_surface(Eigen::Vector3d(0.1, 0.1, 0.1), 4000, false, rng),
+                           IcpOptions{});
+  Eigen::Matrix3Xd face(3, 101);
+  for (int i = 0; i < 100; ++i)
+    face.col(i) = Eigen::Vector3d(-0.03 + 0.006 * (i % 10), -0.03 + 0.006 * (i / 10), 0.05);
+  face.col(100) = Eigen::Vector3d(0, 0, 0.1);
+  const PlaneResiduals fit = icp.plane_residuals(face, Eigen::Vector3d(0, 0, 0.002));
+  ASSERT_EQ(fit.residual_m.size(), 101u);
+  EXPECT_GE(fit.matched, 95);
+  for (int i = 0; i < 100; ++i) {
+    const double residual = fit.residual_m[static_cast<std::size_t>(i)];
+    if (!std::isnan(residual)) {
+      EXPECT_NEAR(residual, -0.002, 2e-4) << i;
+    }
+  }
+  EXPECT_TRUE(std::isnan(fit.residual_m[100]));
+  EXPECT_NEAR(fit.normal_information(2, 2), fit.matched, 0.05 * fit.matched);
+}
+
 TEST(Icp, FuseFitsEdgeCasesAndBadInput) {
   const FusedEstimate one = fuse_fits({Eigen::Vector3d(1, 2, 3)}, 1e-6);
   EXPECT_EQ(one.mean, Eigen::Vector3d(1, 2, 3));

@@ -19,8 +19,12 @@ namespace clutterscope::scene_estimation {
 
 namespace {
 
-// Observed points per ICP fit (an even subsample of the box): enough for a translation.
+// Observed points per ICP fit (an even subsample of the box): enough for the K fits to find
+// their basins; the fused estimate is then refined with every valid pixel of the box, in at
+// most kAllPixelIterations steps from there (point-to-plane converges in one or two along the
+// directions surfaces constrain).
 constexpr int kIcpObservedPoints = 600;
+constexpr int kAllPixelIterations = 10;
 
 // Model surface points (model frame, metres), area-uniform on the triangles, for ICP.
 Eigen::Matrix3Xd surface_points(const datasets::Mesh& mesh, int count, std::mt19937_64& rng) {
@@ -61,8 +65,8 @@ ObservedPoints observed_points(const estimator::BoxObservation& o, int limit) {
   std::vector<int> valid;
   for (int i = 0; i < static_cast<int>(o.depth.size()); ++i)
     if (o.depth[static_cast<std::size_t>(i)] > 0) valid.push_back(i);
-  const int step = std::max<int>(
-      1, static_cast<int>((static_cast<long>(valid.size()) + limit - 1) / limit));
+  const int step =
+      std::max<int>(1, static_cast<int>((static_cast<long>(valid.size()) + limit - 1) / limit));
   const Eigen::Matrix3d k_inv = o.camera_matrix.inverse();
   auto point = [&](int column, int row) -> std::optional<Eigen::Vector3d> {
     if (column < 0 || row < 0 || column >= o.width || row >= o.height) return std::nullopt;
@@ -99,10 +103,10 @@ ObservedPoints observed_points(const estimator::BoxObservation& o, int limit) {
 // it is described (its variance at their median depth and its matching window; the residual
 // variance beyond the sensor's is the model's surface against the depth, which does not
 // average), else the residuals' robust variance and their neighbour correlation.
-Eigen::Matrix3d fit_information(const SceneEstimator::State& s, const estimator::TranslationIcp& icp,
-                                const estimator::BoxObservation& o,
+Eigen::Matrix3d fit_information(const SceneEstimator::State& s,
+                                const estimator::TranslationIcp& icp,
+                                const estimator::BoxObservation& o, const ObservedPoints& all,
                                 const Eigen::Vector3d& position) {
-  const ObservedPoints all = observed_points(o, std::numeric_limits<int>::max());
   const estimator::PlaneResiduals fit = icp.plane_residuals(all.points, position, &all.normals);
   if (fit.matched == 0) return Eigen::Matrix3d::Zero();
   std::vector<double> residuals, depths;
@@ -116,12 +120,13 @@ Eigen::Matrix3d fit_information(const SceneEstimator::State& s, const estimator:
   const double floor = s.options.min_residual_m * s.options.min_residual_m;
   const double residual_variance = std::max(estimator::robust_variance(residuals), floor);
   const std::optional<double>& correlated = s.options.correlated_pixels;
+  const double systematic = s.options.fit_systematic_m * s.options.fit_systematic_m;
   if (!s.noise.described) {
     return estimator::pixel_information(
         fit.normal_information, fit.matched, residual_variance,
         correlated ? *correlated
                    : estimator::correlated_pixels_from_residuals(grid, o.width, o.height),
-        0.0);
+        systematic);
   }
   const datasets::DeclaredNoise& d = s.noise;
   estimator::PixelNoise noise;
@@ -142,7 +147,7 @@ Eigen::Matrix3d fit_information(const SceneEstimator::State& s, const estimator:
   const double sensor_variance = std::max(estimator::depth_variance(noise, *middle), floor);
   return estimator::pixel_information(fit.normal_information, fit.matched, sensor_variance,
                                       noise.correlated_pixels,
-                                      std::max(0.0, residual_variance - sensor_variance));
+                                      std::max(systematic, residual_variance - sensor_variance));
 }
 
 // The free-space share of the full model of obj_id at (rotation, translation) over the detection
@@ -216,16 +221,26 @@ bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
   // (its samples with the proposal's kernel floor, and their Monte Carlo error where the
   // weights collapsed): both come from the same depth, so each direction takes the more
   // precise of the two, never their product (estimator::information_maximum).
+  // The fused estimate refined with every valid pixel, so that it has the information they
+  // give (the K fits used a subsample of kIcpObservedPoints).
+  const ObservedPoints all = observed_points(*object->observation, std::numeric_limits<int>::max());
+  const Eigen::Vector3d fused_camera = frame.support_to_camera * fused.mean;
+  const estimator::IcpResult refined =
+      icp.align(all.points, fused_camera, &all.normals, kAllPixelIterations);
+  const Eigen::Vector3d position = !refined.too_few_correspondences && refined.position.allFinite()
+                                       ? refined.position
+                                       : fused_camera;
   const Eigen::Matrix3d to_support = frame.camera_to_support.linear();
-  const Eigen::Matrix3d information =
-      to_support *
-      fit_information(s, icp, *object->observation, frame.support_to_camera * fused.mean) *
-      to_support.transpose();
+  const Eigen::Matrix3d information = to_support *
+                                      fit_information(s, icp, *object->observation, all, position) *
+                                      to_support.transpose();
   estimator::GaussianMixture spread = belief;
   spread.variances = Eigen::Vector3d::Constant(options.proposal_min_bandwidth_m *
                                                options.proposal_min_bandwidth_m);
-  *mean = fused.mean;
   const Eigen::Matrix3d belief_covariance = estimator::belief_bound(spread);
+  // Along the directions the belief knows better, its mean: the fit only creeps there.
+  *mean = estimator::information_maximum_mean(estimator::mixture_mean(belief), belief_covariance,
+                                              frame.camera_to_support * position, information);
   *covariance = fused.covariance + estimator::information_maximum(belief_covariance, information);
   // How far the refinement moved the estimate out of its belief: the squared Mahalanobis
   // distance of the refined mean from the belief's, under both covariances.

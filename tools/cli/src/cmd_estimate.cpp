@@ -75,6 +75,11 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
       "the same for the model's rotation (per-axis sigma, degrees, >= 0; default as "
       "--model-misfit-mm, 0.25 on real data)");
   command.add_option_function<double>(
+      "--fit-systematic-mm", [&e](double mm) { e.fit_systematic_m = 1e-3 * mm; },
+      "the part of the ICP fit's residual that is the same on every pixel and does not average "
+      "(mm, >= 0; default " +
+          std::to_string(1e3 * scene_estimation::kFitSystematicM).substr(0, 4) + ")");
+  command.add_option_function<double>(
       "--correlated-pixels", [&e](double pixels) { e.correlated_pixels = pixels; },
       "the ICP fit's depth errors count as one per this many image pixels (>= 1; larger: "
       "wider variances). Default: the sensor's matching window (sensor.json or --sensor with "

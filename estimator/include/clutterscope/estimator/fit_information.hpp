@@ -72,4 +72,14 @@ Eigen::Matrix3d belief_bound(const GaussianMixture& belief);
 Eigen::Matrix3d information_maximum(const Eigen::Matrix3d& belief_covariance,
                                     const Eigen::Matrix3d& fit_information);
 
+// The position that goes with information_maximum: along every direction u_i the mean of the
+// source whose variance is taken there, the fit's where l_i >= 1, else the belief's
+// (x = L U (D U^T L^-1 belief_mean + (I - D) U^T L^-1 fit_mean), D = diag(l_i < 1)). With
+// commuting B and J: per common eigenvector the more precise source's coordinate. Throws as
+// information_maximum.
+Eigen::Vector3d information_maximum_mean(const Eigen::Vector3d& belief_mean,
+                                         const Eigen::Matrix3d& belief_covariance,
+                                         const Eigen::Vector3d& fit_mean,
+                                         const Eigen::Matrix3d& fit_information);
+
 }  // namespace clutterscope::estimator

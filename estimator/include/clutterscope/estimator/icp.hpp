@@ -72,9 +72,10 @@ class TranslationIcp {
   // Refines `initial` against the observed points (3 x K). Without enough correspondences the
   // result keeps the last position and converged = false.
   // observed_normals (3 x K, unit or zero where unknown), when given, reject correspondences
-  // between surfaces at an angle (min_normal_cosine).
+  // between surfaces at an angle (min_normal_cosine). max_iterations > 0 replaces the
+  // options' (a few steps from a start that is already close).
   IcpResult align(const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& initial,
-                  const Eigen::Matrix3Xd* observed_normals = nullptr) const;
+                  const Eigen::Matrix3Xd* observed_normals = nullptr, int max_iterations = 0) const;
 
   // The residuals of every observed point at `position` (no refinement), e.g. every valid
   // pixel of the box at the fused estimate, for the fit's information per pixel.

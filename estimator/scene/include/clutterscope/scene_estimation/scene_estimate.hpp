@@ -53,6 +53,11 @@ enum class NonContactForm { kOriented, kAxisAligned };
 
 std::string to_string(NonContactForm form);  // "oriented", "aabb"
 
+// Default of EstimateOptions::fit_systematic_m. Chosen on `bench calibration` --seed 101 and
+// --seed 7 (default sensor and xtion; docs/method.md); measured on seeds 20261401 and
+// 20261402, which chose nothing.
+constexpr double kFitSystematicM = 0.0003;
+
 struct EstimateOptions {
   Observation observation = Observation::kMeasured;
   // Synthetic observations: the sensor model (--sensor PRESET) the GT render goes through,
@@ -91,6 +96,11 @@ struct EstimateOptions {
   // min_residual_m^2.
   std::optional<double> correlated_pixels;
   double min_residual_m = 0.0005;
+  // The part of every pixel's residual that is the same on all pixels of a fit and does not
+  // average (the ICP's sampled model surface and its normals against the depth, at edges
+  // above all): at least this sigma (--fit-systematic-mm). The one constant of the fit's
+  // information chosen on data: see kFitSystematicM.
+  double fit_systematic_m = kFitSystematicM;
   // Model misfit (estimator::model_misfit_covariance, added to every estimate's covariance):
   // per-axis sigmas of the offset (metres) and rotation (degrees) between the model and the
   // object the depth shows. Unset: resolve_model_misfit.
