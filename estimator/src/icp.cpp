@@ -229,19 +229,6 @@ FusedEstimate fuse_fits(const std::vector<Eigen::Vector3d>& fits, double varianc
   return estimate;
 }
 
-Eigen::Matrix3d fused_covariance(const Eigen::Matrix3d& fit_spread,
-                                 const Eigen::Matrix3d& fit_information,
-                                 const Eigen::Matrix3d& belief_covariance) {
-  const Eigen::LLT<Eigen::Matrix3d> belief(belief_covariance);
-  if (belief.info() != Eigen::Success || !belief_covariance.allFinite())
-    throw std::invalid_argument("belief covariance is not positive definite");
-  const Eigen::Matrix3d precision = belief.solve(Eigen::Matrix3d::Identity()) +
-                                    0.5 * (fit_information + fit_information.transpose());
-  Eigen::Matrix3d noise = precision.ldlt().solve(Eigen::Matrix3d::Identity());
-  noise = 0.5 * (noise + noise.transpose());
-  return fit_spread + noise;
-}
-
 Eigen::Matrix3d model_misfit_covariance(double translation_sigma_m, double rotation_sigma_rad,
                                         double radius_m) {
   for (const double value : {translation_sigma_m, rotation_sigma_rad, radius_m})

@@ -98,7 +98,7 @@ class TranslationIcp {
 // start point, a belief sample, with rms 0 and no information) and is never fused. A result
 // still moving after max_iterations is a fit: with enough correspondences it has settled in the
 // directions its surfaces constrain and creeps only along those they do not (the point-to-point
-// term is weak), which the fused covariance bounds by the belief.
+// term is weak), which the belief bounds (estimator::information_maximum).
 std::vector<std::size_t> fits_to_fuse(const std::vector<IcpResult>& results);
 
 struct FusedEstimate {
@@ -115,17 +115,6 @@ struct FusedEstimate {
 // 2.5e-5 = 0.25 cm^2 in the paper). Throws std::invalid_argument for no fits, non-finite fits
 // or a threshold <= 0.
 FusedEstimate fuse_fits(const std::vector<Eigen::Vector3d>& fits, double variance_threshold);
-
-// The covariance of an estimate refined by ICP from belief samples, so that it covers the error
-// it claims: the spread of the fits (basins the belief reaches) plus the fit's own noise,
-// (B^-1 + J)^-1, where J = H / (c sigma^2) is the fit's information (H: normal_information,
-// sigma^2 the residual variance, c >= 1 the number of neighbouring pixels whose noise is one:
-// depth errors are correlated, not independent per pixel) and B the belief's covariance, which
-// bounds the directions the fit cannot see. Symmetric positive definite for B positive
-// definite. Throws std::invalid_argument for a non-positive-definite B.
-Eigen::Matrix3d fused_covariance(const Eigen::Matrix3d& fit_spread,
-                                 const Eigen::Matrix3d& fit_information,
-                                 const Eigen::Matrix3d& belief_covariance);
 
 // The covariance a rigid model misfit adds to a position estimate, which no number of pixels
 // averages out: the model's surface offset from the object's (scan error, GT pose error) with
