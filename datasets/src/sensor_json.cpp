@@ -24,6 +24,27 @@ double optional_sigma(const detail::Json& json, const char* field, double max,
   return value;
 }
 
+detail::Json parse_object(const std::string& text, const std::filesystem::path& path) {
+  detail::Json json;
+  try {
+    json = detail::Json::parse(text);
+  } catch (const detail::Json::exception& error) {
+    throw DatasetError(path, std::string("malformed JSON: ") + error.what());
+  }
+  if (!json.is_object())
+    detail::FieldContext{path, ""}.fail(std::string("expected a JSON object, got ") +
+                                        json.type_name());
+  return json;
+}
+
+std::string read_text(const std::filesystem::path& path) {
+  std::ifstream stream(path, std::ios::binary);
+  if (!stream) throw DatasetError(path, "cannot open file for reading");
+  std::stringstream buffer;
+  buffer << stream.rdbuf();
+  return buffer.str();
+}
+
 }  // namespace
 
 DeclaredMisfit parse_sensor_misfit(const std::string& text, const std::filesystem::path& path) {
@@ -49,6 +70,41 @@ DeclaredMisfit read_sensor_misfit(const std::filesystem::path& path) {
   std::stringstream buffer;
   buffer << stream.rdbuf();
   return parse_sensor_misfit(buffer.str(), path);
+}
+
+DeclaredNoise parse_sensor_noise(const std::string& text, const std::filesystem::path& path) {
+  const detail::Json json = parse_object(text, path);
+  const detail::FieldContext context{path, ""};
+  DeclaredNoise noise;
+  // Bounds far beyond any depth sensor: a value past them is a unit error (mm written as m).
+  noise.noise_a_m = optional_sigma(json, "noise_a_m", 0.1, context);
+  noise.noise_b_per_m = optional_sigma(json, "noise_b_per_m", 1.0, context);
+  noise.noise_z0_m = optional_sigma(json, "noise_z0_m", 10.0, context);
+  noise.quantisation_m = optional_sigma(json, "quantisation_m", 0.1, context);
+  noise.disparity_focal_px = optional_sigma(json, "disparity_focal_px", 1e5, context);
+  noise.disparity_baseline_m = optional_sigma(json, "disparity_baseline_m", 10.0, context);
+  noise.disparity_step_px = optional_sigma(json, "disparity_step_px", 10.0, context);
+  noise.window_half_px = optional_sigma(json, "window_half_px", 100.0, context);
+  noise.described = noise.noise_a_m > 0 || noise.noise_b_per_m > 0;
+  return noise;
+}
+
+DeclaredNoise read_sensor_noise(const std::filesystem::path& path) {
+  return parse_sensor_noise(read_text(path), path);
+}
+
+DeclaredNoise declared_noise(const SensorOptions& options) {
+  DeclaredNoise noise;
+  noise.noise_a_m = options.noise_a_m;
+  noise.noise_b_per_m = options.noise_b_per_m;
+  noise.noise_z0_m = options.noise_z0_m;
+  noise.quantisation_m = options.quantisation_m;
+  noise.disparity_focal_px = options.disparity_focal_px;
+  noise.disparity_baseline_m = options.disparity_baseline_m;
+  noise.disparity_step_px = options.disparity_step_px;
+  noise.window_half_px = options.window_half_px;
+  noise.described = noise.noise_a_m > 0 || noise.noise_b_per_m > 0;
+  return noise;
 }
 
 }  // namespace clutterscope::datasets

@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <limits>
 #include <nanoflann.hpp>
 #include <stdexcept>
 
@@ -98,13 +99,14 @@ TranslationIcp::TranslationIcp(TranslationIcp&&) noexcept = default;
 TranslationIcp& TranslationIcp::operator=(TranslationIcp&&) noexcept = default;
 
 IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& initial,
-                                const Eigen::Matrix3Xd* observed_normals) const {
+                                const Eigen::Matrix3Xd* observed_normals,
+                                int max_iterations) const {
   if (observed_normals && observed_normals->cols() != observed.cols())
     throw std::invalid_argument("ICP needs one normal per observed point");
+  const int iterations = max_iterations > 0 ? max_iterations : options_.max_iterations;
   IcpResult result;
   result.position = initial;
-  const double max_sq = options_.max_correspondence_distance * options_.max_correspondence_distance;
-  for (int iteration = 0; iteration < options_.max_iterations; ++iteration) {
+  for (int iteration = 0; iteration < iterations; ++iteration) {
     // Point-to-plane with a small point-to-point term: sum (n n^T + mu I) (r - step) = 0, so
     // directions constrained by surfaces converge in a few steps and the others (constrained
     // only by edges) still move.
@@ -115,24 +117,10 @@ IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::V
     int count = 0;
     for (int i = 0; i < observed.cols(); ++i) {
       const Eigen::Vector3d query = observed.col(i) - result.position;  // into model offsets
-      if (!query.allFinite()) continue;
       uint32_t nearest = 0;
       double distance_sq = 0;
-      if (tree_->index.knnSearch(query.data(), 1, &nearest, &distance_sq) == 0) continue;
-      if (distance_sq > max_sq) continue;
-      const Eigen::Vector3d normal = tree_->normals.col(nearest);
-      // A model point facing away from the camera cannot be what the sensor saw: the table
-      // around a box matched to its hidden bottom, say, would drag it sideways.
-      if (options_.cull_back_faces &&
-          normal.dot(result.position + tree_->cloud.points.col(nearest)) > 0)
+      if (!correspond(query, result.position, observed_normals, i, &nearest, &distance_sq))
         continue;
-      // Surfaces at an angle do not correspond: the floor next to a box is not its side.
-      if (observed_normals) {
-        const Eigen::Vector3d seen = observed_normals->col(i);
-        if (seen.squaredNorm() > 0 && normal.squaredNorm() > 0 &&
-            std::abs(seen.dot(normal)) < options_.min_normal_cosine)
-          continue;
-      }
       const Eigen::Matrix3d a =
           tree_->normal_outer[nearest] + kPointToPointWeight * Eigen::Matrix3d::Identity();
       normal_matrix += a;
@@ -156,6 +144,51 @@ IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::V
       result.converged = true;
       return result;
     }
+  }
+  return result;
+}
+
+bool TranslationIcp::correspond(const Eigen::Vector3d& query, const Eigen::Vector3d& position,
+                                const Eigen::Matrix3Xd* observed_normals, int i, uint32_t* nearest,
+                                double* distance_sq) const {
+  const double max_sq = options_.max_correspondence_distance * options_.max_correspondence_distance;
+  if (!query.allFinite()) return false;
+  if (tree_->index.knnSearch(query.data(), 1, nearest, distance_sq) == 0) return false;
+  if (*distance_sq > max_sq) return false;
+  const Eigen::Vector3d normal = tree_->normals.col(*nearest);
+  // A model point facing away from the camera cannot be what the sensor saw: the table
+  // around a box matched to its hidden bottom, say, would drag it sideways.
+  if (options_.cull_back_faces && normal.dot(position + tree_->cloud.points.col(*nearest)) > 0)
+    return false;
+  // Surfaces at an angle do not correspond: the floor next to a box is not its side.
+  if (observed_normals) {
+    const Eigen::Vector3d seen = observed_normals->col(i);
+    if (seen.squaredNorm() > 0 && normal.squaredNorm() > 0 &&
+        std::abs(seen.dot(normal)) < options_.min_normal_cosine)
+      return false;
+  }
+  return true;
+}
+
+PlaneResiduals TranslationIcp::plane_residuals(const Eigen::Matrix3Xd& observed,
+                                               const Eigen::Vector3d& position,
+                                               const Eigen::Matrix3Xd* observed_normals) const {
+  if (observed_normals && observed_normals->cols() != observed.cols())
+    throw std::invalid_argument("ICP needs one normal per observed point");
+  PlaneResiduals result;
+  result.residual_m.assign(static_cast<std::size_t>(observed.cols()),
+                           std::numeric_limits<double>::quiet_NaN());
+  for (int i = 0; i < observed.cols(); ++i) {
+    const Eigen::Vector3d query = observed.col(i) - position;
+    uint32_t nearest = 0;
+    double distance_sq = 0;
+    if (!correspond(query, position, observed_normals, i, &nearest, &distance_sq)) continue;
+    const Eigen::Vector3d normal = tree_->normals.col(nearest);
+    if (normal.squaredNorm() == 0) continue;
+    result.residual_m[static_cast<std::size_t>(i)] =
+        normal.dot(query - tree_->cloud.points.col(nearest));
+    result.normal_information += tree_->normal_outer[nearest];
+    ++result.matched;
   }
   return result;
 }
@@ -194,19 +227,6 @@ FusedEstimate fuse_fits(const std::vector<Eigen::Vector3d>& fits, double varianc
   estimate.variance = estimate.covariance.diagonal();
   estimate.confident = (estimate.variance.array() <= variance_threshold).all();
   return estimate;
-}
-
-Eigen::Matrix3d fused_covariance(const Eigen::Matrix3d& fit_spread,
-                                 const Eigen::Matrix3d& fit_information,
-                                 const Eigen::Matrix3d& belief_covariance) {
-  const Eigen::LLT<Eigen::Matrix3d> belief(belief_covariance);
-  if (belief.info() != Eigen::Success || !belief_covariance.allFinite())
-    throw std::invalid_argument("belief covariance is not positive definite");
-  const Eigen::Matrix3d precision = belief.solve(Eigen::Matrix3d::Identity()) +
-                                    0.5 * (fit_information + fit_information.transpose());
-  Eigen::Matrix3d noise = precision.ldlt().solve(Eigen::Matrix3d::Identity());
-  noise = 0.5 * (noise + noise.transpose());
-  return fit_spread + noise;
 }
 
 Eigen::Matrix3d model_misfit_covariance(double translation_sigma_m, double rotation_sigma_rad,

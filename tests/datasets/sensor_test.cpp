@@ -489,5 +489,36 @@ TEST(Sensor, SensorJsonDeclaresTheModelMisfit) {
   }
 }
 
+// sensor.json as generate writes it describes the per-pixel noise the estimator's fit counts
+// (the preset's fields back); without noise coefficients it describes none; bad values are
+// refused naming the file and field.
+TEST(Sensor, SensorJsonDescribesThePixelNoise) {
+  const SensorOptions preset = sensor_preset("xtion");
+  const DeclaredNoise xtion = parse_sensor_noise(to_json(preset).dump(), "s.json");
+  EXPECT_TRUE(xtion.described);
+  EXPECT_DOUBLE_EQ(xtion.noise_a_m, preset.noise_a_m);
+  EXPECT_DOUBLE_EQ(xtion.noise_b_per_m, preset.noise_b_per_m);
+  EXPECT_DOUBLE_EQ(xtion.noise_z0_m, preset.noise_z0_m);
+  EXPECT_DOUBLE_EQ(xtion.quantisation_m, preset.quantisation_m);
+  EXPECT_DOUBLE_EQ(xtion.disparity_focal_px, preset.disparity_focal_px);
+  EXPECT_DOUBLE_EQ(xtion.disparity_baseline_m, preset.disparity_baseline_m);
+  EXPECT_DOUBLE_EQ(xtion.disparity_step_px, preset.disparity_step_px);
+  EXPECT_DOUBLE_EQ(xtion.window_half_px, 4.5);
+  const DeclaredNoise same = declared_noise(preset);
+  EXPECT_DOUBLE_EQ(same.window_half_px, xtion.window_half_px);
+  EXPECT_DOUBLE_EQ(same.noise_b_per_m, xtion.noise_b_per_m);
+  EXPECT_FALSE(parse_sensor_noise(R"({"misfit_translation_sigma_m": 0.002})", "s.json").described);
+  for (const std::string& bad :
+       {std::string(R"({"noise_a_m": 2})"), std::string(R"({"window_half_px": -1})"),
+        std::string(R"({"noise_b_per_m": "x"})")}) {
+    try {
+      parse_sensor_noise(bad, "dir/sensor.json");
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const DatasetError& error) {
+      EXPECT_NE(std::string(error.what()).find("sensor.json"), std::string::npos) << error.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace clutterscope::datasets

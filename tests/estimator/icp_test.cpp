@@ -124,30 +124,6 @@ TEST(Icp, FuseFitsMatchesHandComputedWeights) {
   EXPECT_TRUE(fuse_fits(fits, 1.4375e-6 + 1e-18).confident);
 }
 
-TEST(Icp, FusedCovarianceAddsTheFitNoiseBoundedByTheBelief) {
-  const Eigen::Matrix3d spread = Eigen::Vector3d(1e-6, 2e-6, 0).asDiagonal();
-  const Eigen::Matrix3d belief = Eigen::Vector3d(4e-4, 1e-4, 9e-4).asDiagonal();
-  // No information from the fit: spread + belief.
-  EXPECT_TRUE(fused_covariance(spread, Eigen::Matrix3d::Zero(), belief).isApprox(spread + belief));
-  // Diagonal information j: per axis spread + 1 / (1 / b + j); an axis without information
-  // (a cylinder seen from the side, along its axis) keeps the belief's variance.
-  const Eigen::Vector3d j(1e8, 4e6, 0);
-  const Eigen::Matrix3d c = fused_covariance(spread, j.asDiagonal(), belief);
-  EXPECT_NEAR(c(0, 0), 1e-6 + 1 / (1 / 4e-4 + 1e8), 1e-15);
-  EXPECT_NEAR(c(1, 1), 2e-6 + 1 / (1 / 1e-4 + 4e6), 1e-15);
-  EXPECT_NEAR(c(2, 2), 9e-4, 1e-15);
-  EXPECT_NEAR(c(0, 1), 0.0, 1e-18);
-  // A rotated information matrix rotates the noise term: R (B^-1 + J)^-1 R^T with B = b I.
-  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).matrix();
-  const Eigen::Matrix3d iso = 1e-4 * Eigen::Matrix3d::Identity();
-  const Eigen::Matrix3d rotated =
-      fused_covariance(Eigen::Matrix3d::Zero(), r * j.asDiagonal() * r.transpose(), iso);
-  const Eigen::Vector3d axis_noise(1 / (1e4 + 1e8), 1 / (1e4 + 4e6), 1e-4);
-  EXPECT_TRUE(rotated.isApprox(r * axis_noise.asDiagonal() * r.transpose(), 1e-9));
-  EXPECT_THROW(fused_covariance(spread, Eigen::Matrix3d::Zero(), Eigen::Matrix3d::Zero()),
-               std::invalid_argument);
-}
-
 // Monte Carlo of the definition: a rotation vector theta ~ N(0, s^2 I) applied to a point
 // uniform on the sphere of radius r moves it by theta x p; its per-axis spread matches the
 // closed form (2/3) s^2 r^2 within 4 standard errors of a variance estimate (sqrt(2 / n) of it
@@ -195,6 +171,30 @@ TEST(Icp, NormalInformationOfAFlatFaceHasNoneAlongTheFace) {
   EXPECT_NEAR(fit.normal_information(2, 2), fit.correspondences, 0.05 * fit.correspondences);
   EXPECT_LT(fit.normal_information(0, 0), 0.05 * fit.correspondences);
   EXPECT_LT(fit.normal_information(1, 1), 0.05 * fit.correspondences);
+}
+
+TEST(Icp, PlaneResidualsAreTheOffsetAlongTheNormalAtAFixedPosition) {
+  // The face z = 0.05 of a box at position (0, 0, 0.002): every observed point of z = 0.05 is
+  // 2 mm behind the model's face along its normal +z, whatever its place on the face; a point
+  // 5 cm off any surface has no correspondence.
+  std::mt19937_64 rng(5);
+  const TranslationIcp icp(box_surface(Eigen::Vector3d(0.1, 0.1, 0.1), 4000, false, rng),
+                           IcpOptions{});
+  Eigen::Matrix3Xd face(3, 101);
+  for (int i = 0; i < 100; ++i)
+    face.col(i) = Eigen::Vector3d(-0.03 + 0.006 * (i % 10), -0.03 + 0.006 * (i / 10), 0.05);
+  face.col(100) = Eigen::Vector3d(0, 0, 0.1);
+  const PlaneResiduals fit = icp.plane_residuals(face, Eigen::Vector3d(0, 0, 0.002));
+  ASSERT_EQ(fit.residual_m.size(), 101u);
+  EXPECT_GE(fit.matched, 95);
+  for (int i = 0; i < 100; ++i) {
+    const double residual = fit.residual_m[static_cast<std::size_t>(i)];
+    if (!std::isnan(residual)) {
+      EXPECT_NEAR(residual, -0.002, 2e-4) << i;
+    }
+  }
+  EXPECT_TRUE(std::isnan(fit.residual_m[100]));
+  EXPECT_NEAR(fit.normal_information(2, 2), fit.matched, 0.05 * fit.matched);
 }
 
 TEST(Icp, FuseFitsEdgeCasesAndBadInput) {

@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/estimator/confidence.hpp>
+#include <clutterscope/estimator/fit_information.hpp>
 #include <clutterscope/estimator/icp.hpp>
 #include <clutterscope/estimator/potentials.hpp>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 
@@ -17,8 +19,12 @@ namespace clutterscope::scene_estimation {
 
 namespace {
 
-// Observed points per ICP fit (an even subsample of the box): enough for a translation.
+// Observed points per ICP fit (an even subsample of the box): enough for the K fits to find
+// their basins; the fused estimate is then refined with every valid pixel of the box, in at
+// most kAllPixelIterations steps from there (point-to-plane converges in one or two along the
+// directions surfaces constrain).
 constexpr int kIcpObservedPoints = 600;
+constexpr int kAllPixelIterations = 10;
 
 // Model surface points (model frame, metres), area-uniform on the triangles, for ICP.
 Eigen::Matrix3Xd surface_points(const datasets::Mesh& mesh, int count, std::mt19937_64& rng) {
@@ -49,13 +55,18 @@ Eigen::Matrix3Xd surface_points(const datasets::Mesh& mesh, int count, std::mt19
 
 // Observed points (camera frame) of every pixel with depth in the box, at most `limit` (an
 // even subsample in raster order), with their normals from the neighbouring pixels (zero where
-// a neighbour has no depth).
-std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> observed_points(const estimator::BoxObservation& o,
-                                                              int limit) {
+// a neighbour has no depth) and their pixel indices in the box (row-major).
+struct ObservedPoints {
+  Eigen::Matrix3Xd points, normals;
+  std::vector<int> pixels;
+};
+
+ObservedPoints observed_points(const estimator::BoxObservation& o, int limit) {
   std::vector<int> valid;
   for (int i = 0; i < static_cast<int>(o.depth.size()); ++i)
     if (o.depth[static_cast<std::size_t>(i)] > 0) valid.push_back(i);
-  const int step = std::max<int>(1, static_cast<int>((valid.size() + limit - 1) / limit));
+  const int step =
+      std::max<int>(1, static_cast<int>((static_cast<long>(valid.size()) + limit - 1) / limit));
   const Eigen::Matrix3d k_inv = o.camera_matrix.inverse();
   auto point = [&](int column, int row) -> std::optional<Eigen::Vector3d> {
     if (column < 0 || row < 0 || column >= o.width || row >= o.height) return std::nullopt;
@@ -64,20 +75,79 @@ std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> observed_points(const estimator::B
     return k_inv * Eigen::Vector3d(o.x + column + 0.5, o.y + row + 0.5, 1) * z;
   };
   const std::size_t count = (valid.size() + step - 1) / step;
-  Eigen::Matrix3Xd points(3, count), normals = Eigen::Matrix3Xd::Zero(3, count);
+  ObservedPoints out;
+  out.points.resize(3, static_cast<Eigen::Index>(count));
+  out.normals = Eigen::Matrix3Xd::Zero(3, static_cast<Eigen::Index>(count));
   int n = 0;
   for (std::size_t j = 0; j < valid.size(); j += step, ++n) {
     const int column = valid[j] % o.width, row = valid[j] / o.width;
-    points.col(n) = *point(column, row);
+    out.points.col(n) = *point(column, row);
+    out.pixels.push_back(valid[j]);
     // Central differences, one-sided at the box's border or next to a pixel without depth.
     const auto right = point(column + 1, row), left = point(column - 1, row);
     const auto down = point(column, row + 1), up = point(column, row - 1);
-    const Eigen::Vector3d du = (right ? *right : points.col(n)) - (left ? *left : points.col(n));
-    const Eigen::Vector3d dv = (down ? *down : points.col(n)) - (up ? *up : points.col(n));
+    const Eigen::Vector3d here = out.points.col(n);
+    const Eigen::Vector3d du = (right ? *right : here) - (left ? *left : here);
+    const Eigen::Vector3d dv = (down ? *down : here) - (up ? *up : here);
     const Eigen::Vector3d normal = du.cross(dv);
-    if (normal.norm() > 0) normals.col(n) = normal.normalized();
+    if (normal.norm() > 0) out.normals.col(n) = normal.normalized();
   }
-  return {points.leftCols(n), normals.leftCols(n)};
+  out.points.conservativeResize(3, n);
+  out.normals.conservativeResize(3, n);
+  return out;
+}
+
+// The fit's information about the object's position (camera frame) from every valid pixel of
+// its box at the fused estimate (estimator::pixel_information): the point-to-plane residuals
+// of the pixels that correspond to the model, the noise of the sensor that measured them where
+// it is described (its variance at their median depth and its matching window; the residual
+// variance beyond the sensor's is the model's surface against the depth, which does not
+// average), else the residuals' robust variance and their neighbour correlation.
+Eigen::Matrix3d fit_information(const SceneEstimator::State& s,
+                                const estimator::TranslationIcp& icp,
+                                const estimator::BoxObservation& o, const ObservedPoints& all,
+                                const Eigen::Vector3d& position) {
+  const estimator::PlaneResiduals fit = icp.plane_residuals(all.points, position, &all.normals);
+  if (fit.matched == 0) return Eigen::Matrix3d::Zero();
+  std::vector<double> residuals, depths;
+  std::vector<double> grid(o.depth.size(), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t i = 0; i < fit.residual_m.size(); ++i) {
+    if (std::isnan(fit.residual_m[i])) continue;
+    residuals.push_back(fit.residual_m[i]);
+    depths.push_back(all.points(2, static_cast<Eigen::Index>(i)));
+    grid[static_cast<std::size_t>(all.pixels[i])] = fit.residual_m[i];
+  }
+  const double floor = s.options.min_residual_m * s.options.min_residual_m;
+  const double residual_variance = std::max(estimator::robust_variance(residuals), floor);
+  const std::optional<double>& correlated = s.options.correlated_pixels;
+  const double systematic = s.options.fit_systematic_m * s.options.fit_systematic_m;
+  if (!s.noise.described) {
+    return estimator::pixel_information(
+        fit.normal_information, fit.matched, residual_variance,
+        correlated ? *correlated
+                   : estimator::correlated_pixels_from_residuals(grid, o.width, o.height),
+        systematic);
+  }
+  const datasets::DeclaredNoise& d = s.noise;
+  estimator::PixelNoise noise;
+  noise.a_m = d.noise_a_m;
+  noise.b_per_m = d.noise_b_per_m;
+  noise.z0_m = d.noise_z0_m;
+  noise.quantisation_m = d.quantisation_m;
+  if (d.disparity_focal_px > 0 && d.disparity_baseline_m > 0)
+    noise.disparity_step_per_m =
+        d.disparity_step_px / (d.disparity_focal_px * d.disparity_baseline_m);
+  // The window is in the depth sensor's pixels; the image's are finer by fx / its focal length.
+  const double lateral_scale =
+      d.disparity_focal_px > 0 ? o.camera_matrix(0, 0) / d.disparity_focal_px : 1.0;
+  noise.correlated_pixels =
+      correlated ? *correlated : estimator::matching_window_pixels(d.window_half_px, lateral_scale);
+  const auto middle = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
+  std::nth_element(depths.begin(), middle, depths.end());
+  const double sensor_variance = std::max(estimator::depth_variance(noise, *middle), floor);
+  return estimator::pixel_information(fit.normal_information, fit.matched, sensor_variance,
+                                      noise.correlated_pixels,
+                                      std::max(systematic, residual_variance - sensor_variance));
 }
 
 // The free-space share of the full model of obj_id at (rotation, translation) over the detection
@@ -121,7 +191,9 @@ bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
   const estimator::TranslationIcp icp(
       object->rotation * (s.model_points(object->obj_id).colwise() - object->model_centre),
       icp_options);
-  const auto [observed, normals] = observed_points(*object->observation, kIcpObservedPoints);
+  const ObservedPoints subsample = observed_points(*object->observation, kIcpObservedPoints);
+  const Eigen::Matrix3Xd& observed = subsample.points;
+  const Eigen::Matrix3Xd& normals = subsample.normals;
   const Eigen::MatrixXd starts = estimator::sample_mixture(belief, options.icp_samples, rng);
   std::vector<estimator::IcpResult> results;
   for (int k = 0; k < starts.cols(); ++k) {
@@ -145,27 +217,31 @@ bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
     object->initial_error_m.reset();
     return false;
   }
-  // The fits' information per unit residual variance and the residual variance, averaged
-  // with the fusion weights, in the support frame; the belief's spread (its samples, with
-  // the proposal's kernel floor) bounds what the fits cannot see.
-  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
-  double residual_variance = 0;
-  for (std::size_t k = 0; k < fit_results.size(); ++k) {
-    information += fused.weights[static_cast<Eigen::Index>(k)] * fit_results[k].normal_information;
-    residual_variance += fused.weights[static_cast<Eigen::Index>(k)] * fit_results[k].rms_distance *
-                         fit_results[k].rms_distance;
-  }
+  // The fit's information per valid pixel at the fused estimate, and the belief's bound
+  // (its samples with the proposal's kernel floor, and their Monte Carlo error where the
+  // weights collapsed): both come from the same depth, so each direction takes the more
+  // precise of the two, never their product (estimator::information_maximum).
+  // The fused estimate refined with every valid pixel, so that it has the information they
+  // give (the K fits used a subsample of kIcpObservedPoints).
+  const ObservedPoints all = observed_points(*object->observation, std::numeric_limits<int>::max());
+  const Eigen::Vector3d fused_camera = frame.support_to_camera * fused.mean;
+  const estimator::IcpResult refined =
+      icp.align(all.points, fused_camera, &all.normals, kAllPixelIterations);
+  const Eigen::Vector3d position = !refined.too_few_correspondences && refined.position.allFinite()
+                                       ? refined.position
+                                       : fused_camera;
   const Eigen::Matrix3d to_support = frame.camera_to_support.linear();
-  const double noise_variance =
-      std::max(residual_variance, options.min_residual_m * options.min_residual_m);
-  information = to_support * information * to_support.transpose() /
-                (options.correlated_pixels * noise_variance);
+  const Eigen::Matrix3d information = to_support *
+                                      fit_information(s, icp, *object->observation, all, position) *
+                                      to_support.transpose();
   estimator::GaussianMixture spread = belief;
   spread.variances = Eigen::Vector3d::Constant(options.proposal_min_bandwidth_m *
                                                options.proposal_min_bandwidth_m);
-  *mean = fused.mean;
-  const Eigen::Matrix3d belief_covariance = estimator::mixture_covariance(spread);
-  *covariance = estimator::fused_covariance(fused.covariance, information, belief_covariance);
+  const Eigen::Matrix3d belief_covariance = estimator::belief_bound(spread);
+  // Along the directions the belief knows better, its mean: the fit only creeps there.
+  *mean = estimator::information_maximum_mean(estimator::mixture_mean(belief), belief_covariance,
+                                              frame.camera_to_support * position, information);
+  *covariance = fused.covariance + estimator::information_maximum(belief_covariance, information);
   // How far the refinement moved the estimate out of its belief: the squared Mahalanobis
   // distance of the refined mean from the belief's, under both covariances.
   const Eigen::Vector3d shift = *mean - estimator::mixture_mean(belief);
@@ -219,14 +295,14 @@ void refine_and_fuse(SceneEstimator::State& s, const SceneFrame& frame, const Sc
       // the estimate is the belief's mean, its covariance the belief's spread (particles and
       // kernels), confident only if that is within the threshold.
       mean = estimator::mixture_mean(belief);
-      covariance = estimator::mixture_covariance(belief);
+      covariance = estimator::belief_bound(belief);
     } else if (!fit_by_icp(s, frame, belief, rng, &object, &mean, &covariance)) {
       if (!object.failure.empty()) continue;
       // Nothing was fitted (too few observed points near any belief sample, e.g. a sliver of a
       // few pixels): as for a hidden object, the belief's mean and spread, never the start
       // points fused as if they were fits.
       mean = estimator::mixture_mean(belief);
-      covariance = estimator::mixture_covariance(belief);
+      covariance = estimator::belief_bound(belief);
     }
     // Isotropic, so the same in the support frame.
     covariance += estimator::model_misfit_covariance(s.misfit.translation_m,

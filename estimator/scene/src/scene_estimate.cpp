@@ -73,9 +73,11 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (!(icp_max_distance_m > 0)) return fail("ICP correspondence distance must be > 0");
   if (!(min_effective_sample_fraction >= 0) || !(min_effective_sample_fraction <= 1))
     return fail("--min-ess-fraction must be in [0, 1]");
-  if (!(correlated_pixels >= 1) || !std::isfinite(correlated_pixels))
+  if (correlated_pixels && (!(*correlated_pixels >= 1) || !std::isfinite(*correlated_pixels)))
     return fail("--correlated-pixels must be a finite number >= 1");
   if (!(min_residual_m > 0)) return fail("the residual floor must be > 0");
+  if (!(fit_systematic_m >= 0) || !std::isfinite(fit_systematic_m))
+    return fail("--fit-systematic-mm must be a finite number >= 0");
   if (!(free_space_tolerance_m >= 0) || !std::isfinite(free_space_tolerance_m))
     return fail("free-space tolerance must be a finite number >= 0");
   if (!(max_seen_through >= 0 && max_seen_through <= 1))
@@ -227,10 +229,24 @@ ModelMisfit resolve_model_misfit(const EstimateOptions& options,
   return misfit;
 }
 
+PixelNoiseSource resolve_pixel_noise(const EstimateOptions& options,
+                                     const datasets::BopDataset& dataset) {
+  const fs::path sensor_json = dataset.root() / "sensor.json";
+  if (options.observation == Observation::kSynthetic)
+    return {datasets::declared_noise(options.sensor),
+            "sensor preset " + options.sensor.preset + " (--observation synthetic)"};
+  if (fs::exists(sensor_json)) {
+    const datasets::DeclaredNoise declared = datasets::read_sensor_noise(sensor_json);
+    if (declared.described) return {declared, "sensor.json"};
+  }
+  return {datasets::DeclaredNoise{}, "the fit's residuals (no sensor description)"};
+}
+
 SceneEstimator::State::State(const datasets::BopDataset& data, const EstimateOptions& opts)
     : dataset(data),
       options(opts),
       misfit(resolve_model_misfit(opts, data)),
+      noise(resolve_pixel_noise(opts, data).noise),
       context(render::EglContext::create()),
       renderer(context),
       models(data, opts.model_cache()),

@@ -34,6 +34,7 @@ struct SceneEstimator::State {
   const datasets::BopDataset& dataset;
   EstimateOptions options;
   ModelMisfit misfit;
+  datasets::DeclaredNoise noise;  // resolve_pixel_noise
   render::EglContext context;
   render::Renderer renderer;
   render::ModelCache models;

@@ -74,11 +74,16 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
       "--model-misfit-deg", [&e](double deg) { e.misfit_rotation_deg = deg; },
       "the same for the model's rotation (per-axis sigma, degrees, >= 0; default as "
       "--model-misfit-mm, 0.25 on real data)");
-  command
-      .add_option("--correlated-pixels", e.correlated_pixels,
-                  "calibrated covariance: the ICP fit's depth noise counts as independent once "
-                  "per this many matched pixels (>= 1; larger: wider variances)")
-      ->capture_default_str();
+  command.add_option_function<double>(
+      "--fit-systematic-mm", [&e](double mm) { e.fit_systematic_m = 1e-3 * mm; },
+      "the part of the ICP fit's residual that is the same on every pixel and does not average "
+      "(mm, >= 0; default " +
+          std::to_string(1e3 * scene_estimation::kFitSystematicM).substr(0, 4) + ")");
+  command.add_option_function<double>(
+      "--correlated-pixels", [&e](double pixels) { e.correlated_pixels = pixels; },
+      "the ICP fit's depth errors count as one per this many image pixels (>= 1; larger: "
+      "wider variances). Default: the sensor's matching window (sensor.json or --sensor with "
+      "--observation synthetic), else the neighbour correlation of the fit's residuals");
   command
       .add_option("--min-ess-fraction", e.min_effective_sample_fraction,
                   "adaptive tempering: the unary and non-contact factors of a node are raised to "

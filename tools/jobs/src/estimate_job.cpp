@@ -400,7 +400,11 @@ nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
   // earlier estimators (untempered product proposals, spread-only variances) do not resume.
   fingerprint["belief_proposal"] = e.adaptive_belief_proposal ? "adaptive" : "product";
   fingerprint["min_ess_fraction"] = e.min_effective_sample_fraction;
-  fingerprint["correlated_pixels"] = e.correlated_pixels;
+  // The fit's information per pixel (issue 25): the pixel noise's source and any override.
+  fingerprint["information"] = "per_pixel";
+  fingerprint["pixel_noise_source"] = resolve_pixel_noise(e, dataset).source;
+  if (e.correlated_pixels) fingerprint["correlated_pixels"] = *e.correlated_pixels;
+  fingerprint["fit_systematic_mm"] = 1e3 * e.fit_systematic_m;
   // Full 3x3 covariances (cov_* columns, nees = e^T S^-1 e) and only converged ICP fits fused:
   // folders of earlier estimators (diagonal nees) neither resume nor merge with these.
   fingerprint["covariance"] = "full";

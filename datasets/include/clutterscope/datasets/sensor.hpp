@@ -150,6 +150,22 @@ struct DeclaredMisfit {
 DeclaredMisfit parse_sensor_misfit(const std::string& text, const std::filesystem::path& path);
 DeclaredMisfit read_sensor_misfit(const std::filesystem::path& path);
 
+// The per-pixel depth noise a dataset's sensor.json declares (the SensorOptions fields of the
+// same names, 0 where absent): what the estimator's fit counts per pixel. `described` is false
+// when neither noise_a_m nor noise_b_per_m is positive (no noise model: the estimator estimates
+// it from the residuals). parse_ throws DatasetError naming `path` and the field for malformed
+// JSON, a value that is not a number or one outside its bound (a unit error).
+struct DeclaredNoise {
+  bool described = false;
+  double noise_a_m = 0, noise_b_per_m = 0, noise_z0_m = 0, quantisation_m = 0;
+  double disparity_focal_px = 0, disparity_baseline_m = 0, disparity_step_px = 0;
+  double window_half_px = 0;
+};
+DeclaredNoise parse_sensor_noise(const std::string& text, const std::filesystem::path& path);
+DeclaredNoise read_sensor_noise(const std::filesystem::path& path);
+// The same fields of options (synthetic observations through a preset).
+DeclaredNoise declared_noise(const SensorOptions& options);
+
 // Flat-shaded colour image (CV_8UC3 BGR): each label's colour (RGB, index = label, 0 the
 // background) times a Lambertian term from the clean depth's surface normals, light at the camera.
 cv::Mat shade_labels(const cv::Mat& clean_depth_m, const cv::Mat& labels, const Camera& camera,

@@ -12,6 +12,7 @@
 // table in the detection box do not pull the fit. All points in one frame (metres).
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -47,6 +48,15 @@ struct IcpResult {
   bool too_few_correspondences = false;
 };
 
+// The point-to-plane residuals of observed points against the model at a fixed position, with
+// the correspondences of align: residual n . (p - m) per observed point (NaN where it has no
+// correspondence), the sum of n n^T over the matched points and their count.
+struct PlaneResiduals {
+  std::vector<double> residual_m;
+  Eigen::Matrix3d normal_information = Eigen::Matrix3d::Zero();
+  int matched = 0;
+};
+
 class TranslationIcp {
  public:
   // model_points: 3 x N surface points of the model, already rotated into the frame of the
@@ -62,11 +72,22 @@ class TranslationIcp {
   // Refines `initial` against the observed points (3 x K). Without enough correspondences the
   // result keeps the last position and converged = false.
   // observed_normals (3 x K, unit or zero where unknown), when given, reject correspondences
-  // between surfaces at an angle (min_normal_cosine).
+  // between surfaces at an angle (min_normal_cosine). max_iterations > 0 replaces the
+  // options' (a few steps from a start that is already close).
   IcpResult align(const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& initial,
-                  const Eigen::Matrix3Xd* observed_normals = nullptr) const;
+                  const Eigen::Matrix3Xd* observed_normals = nullptr, int max_iterations = 0) const;
+
+  // The residuals of every observed point at `position` (no refinement), e.g. every valid
+  // pixel of the box at the fused estimate, for the fit's information per pixel.
+  PlaneResiduals plane_residuals(const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& position,
+                                 const Eigen::Matrix3Xd* observed_normals = nullptr) const;
 
  private:
+  // The model point observed point i (query = point - position) corresponds to, if any.
+  bool correspond(const Eigen::Vector3d& query, const Eigen::Vector3d& position,
+                  const Eigen::Matrix3Xd* observed_normals, int i, uint32_t* nearest,
+                  double* distance_sq) const;
+
   struct Tree;
   std::unique_ptr<Tree> tree_;
   IcpOptions options_;
@@ -77,7 +98,7 @@ class TranslationIcp {
 // start point, a belief sample, with rms 0 and no information) and is never fused. A result
 // still moving after max_iterations is a fit: with enough correspondences it has settled in the
 // directions its surfaces constrain and creeps only along those they do not (the point-to-point
-// term is weak), which the fused covariance bounds by the belief.
+// term is weak), which the belief bounds (estimator::information_maximum).
 std::vector<std::size_t> fits_to_fuse(const std::vector<IcpResult>& results);
 
 struct FusedEstimate {
@@ -94,17 +115,6 @@ struct FusedEstimate {
 // 2.5e-5 = 0.25 cm^2 in the paper). Throws std::invalid_argument for no fits, non-finite fits
 // or a threshold <= 0.
 FusedEstimate fuse_fits(const std::vector<Eigen::Vector3d>& fits, double variance_threshold);
-
-// The covariance of an estimate refined by ICP from belief samples, so that it covers the error
-// it claims: the spread of the fits (basins the belief reaches) plus the fit's own noise,
-// (B^-1 + J)^-1, where J = H / (c sigma^2) is the fit's information (H: normal_information,
-// sigma^2 the residual variance, c >= 1 the number of neighbouring pixels whose noise is one:
-// depth errors are correlated, not independent per pixel) and B the belief's covariance, which
-// bounds the directions the fit cannot see. Symmetric positive definite for B positive
-// definite. Throws std::invalid_argument for a non-positive-definite B.
-Eigen::Matrix3d fused_covariance(const Eigen::Matrix3d& fit_spread,
-                                 const Eigen::Matrix3d& fit_information,
-                                 const Eigen::Matrix3d& belief_covariance);
 
 // The covariance a rigid model misfit adds to a position estimate, which no number of pixels
 // averages out: the model's surface offset from the object's (scan error, GT pose error) with
