@@ -85,6 +85,83 @@ TEST(Nbp, LoopyGrid2x2MatchesExactJointMarginals) {
                   independent_sampling_error(200));
 }
 
+// The scene estimator's configuration (scene_estimation::EstimateOptions): the paper's
+// per-message products with the adaptive belief proposal, the unary a pointwise factor. The
+// beliefs are then importance-weighted samples, so the tolerances follow from their effective
+// sample size E (the run-averaged smallest of the final beliefs), each at a family-wise 0.1%
+// over the worst of the C = nodes x dimensions cells and R runs:
+// - one run's mean misses the exact one by N(0, 1/E) sigma; the RMS over R runs of the worst
+//   cell stays below sqrt(q / R / E), q the chi-square R-dof quantile at 1 - 0.001 / C
+//   (Wilson-Hilferty);
+// - the mean over R runs misses by N(0, 1/(R E)): at most z / sqrt(R E), z the normal
+//   quantile at 1 - 0.0005 / C;
+// - the run-averaged variance ratio is 1 within z sqrt(2 / (R E)) (the relative error of a
+//   variance from E samples is sqrt(2 / E)), plus the rule-of-thumb kernels the belief's
+//   samples were drawn with, which widen it by at most MAX_KERNEL_WIDENING.
+struct SampleSizeTolerance {
+  double rms, averaged, variance;
+};
+
+SampleSizeTolerance sample_size_tolerance(double ess, int runs, int cells) {
+  const double alpha = 1e-3 / cells;
+  // Normal quantile by bisection on erfc (two-sided alpha).
+  double lo = 0, hi = 10;
+  for (int k = 0; k < 100; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (std::erfc(mid / std::sqrt(2.0)) > alpha ? lo : hi) = mid;
+  }
+  const double z = lo;
+  const double z_one_sided = [&] {
+    double a = 0, b = 10;
+    for (int k = 0; k < 100; ++k) {
+      const double mid = 0.5 * (a + b);
+      (0.5 * std::erfc(mid / std::sqrt(2.0)) > alpha ? a : b) = mid;
+    }
+    return a;
+  }();
+  const double r = runs, h = 2.0 / (9.0 * r);
+  const double chi2 = r * std::pow(1 - h + z_one_sided * std::sqrt(h), 3);
+  return {std::sqrt(chi2 / r / ess), z / std::sqrt(r * ess), z * std::sqrt(2.0 / (r * ess))};
+}
+
+void expect_within_sample_size(const char* name, const GaussianAccuracy& a, int cells) {
+  print(name, a);
+  const SampleSizeTolerance t = sample_size_tolerance(a.final_effective_sample_size, a.runs, cells);
+  std::printf("  final ESS %.1f: tolerances rms %.3f, averaged %.3f, variance +-%.3f\n",
+              a.final_effective_sample_size, t.rms, t.averaged, t.variance);
+  EXPECT_LE(a.rms_error_sigma, t.rms) << name;
+  EXPECT_LE(a.averaged_error_sigma, t.averaged) << name;
+  EXPECT_GE(a.min_variance_ratio, 1 - t.variance) << name;
+  EXPECT_LE(a.max_variance_ratio, 1 + t.variance) << name;
+}
+
+NbpOptions scene_estimator_options() {
+  NbpOptions options;
+  options.particles = 100;
+  options.iterations = 15;
+  options.adaptive_belief_proposal = true;
+  options.proposal_min_variance = 1e-6;
+  return options;
+}
+
+TEST(Nbp, AdaptiveProposalChainOfFive3DMatchesExactMarginals) {
+  for (const bool pointwise : {false, true}) {
+    expect_within_sample_size(
+        pointwise ? "chain, adaptive, pointwise unary" : "chain, adaptive",
+        measure_gaussian_accuracy(chain_model(), pointwise, scene_estimator_options(), kRuns, 1),
+        5 * 3);
+  }
+}
+
+TEST(Nbp, AdaptiveProposalLoopyGrid2x2MatchesExactJointMarginals) {
+  for (const bool pointwise : {false, true}) {
+    expect_within_sample_size(
+        pointwise ? "grid, adaptive, pointwise unary" : "grid, adaptive",
+        measure_gaussian_accuracy(grid_model(), pointwise, scene_estimator_options(), kRuns, 1),
+        4 * 3);
+  }
+}
+
 TEST(Nbp, PointwiseUnaryThroughImportanceWeights) {
   // Unary as a pointwise factor: the proposal of a message with no other input is the node's
   // initial mixture N(y, 4 r) and the importance weights carry the unary, so a run's error is
