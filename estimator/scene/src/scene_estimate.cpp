@@ -242,7 +242,8 @@ ModelMisfit resolve_model_misfit(const EstimateOptions& options,
 const ModelMisfit& SceneEstimator::State::misfit_of(const std::string& split_folder) {
   auto found = misfits.find(split_folder);
   if (found == misfits.end())
-    found = misfits.emplace(split_folder, resolve_model_misfit(options, dataset, split_folder)).first;
+    found =
+        misfits.emplace(split_folder, resolve_model_misfit(options, dataset, split_folder)).first;
   return found->second;
 }
 
