@@ -125,12 +125,13 @@ GaussianAccuracy measure_gaussian_accuracy(const LinearGaussianModel& model, boo
   const int d = model.dimension;
   Eigen::MatrixXd signed_error = Eigen::MatrixXd::Zero(d, n), abs_error = signed_error,
                   sq_error = signed_error, variance_ratio = signed_error;
-  double min_ess = 0;
+  double min_ess = 0, final_ess = 0;
   const auto start = std::chrono::steady_clock::now();
   for (int run = 0; run < runs; ++run) {
     std::mt19937_64 rng(first_seed + run);
     const NbpResult result = run_nbp(mrf, options, rng);
     min_ess += result.summary.min_effective_sample_size;
+    final_ess += result.summary.final_min_effective_sample_size;
     for (int s = 0; s < n; ++s) {
       const GaussianMixture& belief = result.beliefs[s];
       const Eigen::VectorXd mean = belief.means * belief.weights;
@@ -153,6 +154,7 @@ GaussianAccuracy measure_gaussian_accuracy(const LinearGaussianModel& model, boo
   accuracy.min_variance_ratio = variance_ratio.minCoeff() / runs;
   accuracy.max_variance_ratio = variance_ratio.maxCoeff() / runs;
   accuracy.min_effective_sample_size = min_ess / runs;
+  accuracy.final_effective_sample_size = final_ess / runs;
   accuracy.seconds_per_run =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() / runs;
   return accuracy;

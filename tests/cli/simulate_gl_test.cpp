@@ -146,6 +146,50 @@ TEST(SimulateGl, Tray10PaperThresholdEmptiesTheTrayAndALooserOneIsCompared) {
   EXPECT_EQ(compare[2].at(3), std::to_string(loose_failures));
 }
 
+// Issue 25, the paper's Fig. 6 claim as a rate over seeds: tray6 scene 2 (6 objects, one
+// completely hidden) at the estimator's defaults. Scene 2 was chosen at seed 1 among the six
+// tray6 scenes as one where a looser threshold picks wrongly (scenes 1-4 do at 4 or 25 cm^2, 0
+// and 5 do not); seeds 2-8 were measured after that choice. Measured: at 0.25 cm^2 the tray is
+// emptied without a wrong pick at 6 of 8 seeds (seed 4: one confident estimate off by more than
+// 2 cm; seed 5: nothing confident in round 1, no progress); at 4 cm^2 every seed makes wrong
+// picks (14 in all, 1 at 0.25 cm^2); about 60 s on two busy cores.
+TEST(SimulateGl, PaperThresholdUnloadsWithoutWrongPicksWhereALooserOneMakesThemOverSeeds) {
+  std::string why;
+  if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
+  const fs::path tray6 = fs::path(CLUTTERSCOPE_SAMPLES_DIR) / "tray6";
+  const int seeds = 8;
+  int paper_clean = 0, loose_wrong = 0, paper_failures = 0, loose_failures = 0;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    const fs::path out = testing::fresh_dir("simulate_rate_" + std::to_string(seed));
+    std::string output;
+    ASSERT_EQ(run("simulate " + q(tray6) + " --scene 2 --image 0 --quiet --out " + q(out) +
+                      " --compare-thresholds 0.25,4 --seed " + std::to_string(seed),
+                  &output),
+              0)
+        << output;
+    const nlohmann::json paper =
+        nlohmann::json::parse(testing::read_file(out / "threshold_0.25" / "summary.json"));
+    const nlohmann::json loose =
+        nlohmann::json::parse(testing::read_file(out / "threshold_4" / "summary.json"));
+    const int paper_failed = paper.at("failed_picks").get<int>();
+    const int loose_failed = loose.at("failed_picks").get<int>();
+    std::printf("seed %d: 0.25 cm^2 %s, %d wrong picks; 4 cm^2 %s, %d wrong picks\n", seed,
+                paper.at("stop").get<std::string>().c_str(), paper_failed,
+                loose.at("stop").get<std::string>().c_str(), loose_failed);
+    paper_clean += paper.at("stop") == "tray empty" && paper_failed == 0;
+    loose_wrong += loose_failed > 0;
+    paper_failures += paper_failed;
+    loose_failures += loose_failed;
+  }
+  std::printf(
+      "0.25 cm^2 empties the tray without a wrong pick at %d of %d seeds; 4 cm^2 picks "
+      "wrongly at %d of %d (wrong picks %d against %d)\n",
+      paper_clean, seeds, loose_wrong, seeds, paper_failures, loose_failures);
+  EXPECT_GE(paper_clean, 5);
+  EXPECT_GE(loose_wrong, 6);
+  EXPECT_LT(2 * paper_failures, loose_failures);
+}
+
 TEST(SimulateGl, SceneWithoutGraphRunsOnTheInferredGraphAndSaysSo) {
   std::string why;
   if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;

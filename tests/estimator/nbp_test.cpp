@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <utility>
@@ -83,6 +84,147 @@ TEST(Nbp, LoopyGrid2x2MatchesExactJointMarginals) {
   expect_accurate("grid",
                   measure_gaussian_accuracy(grid_model(), false, acceptance_options(), kRuns, 1),
                   independent_sampling_error(200));
+}
+
+// Issue 25: the exact chain and grid tests with the adaptive belief proposal (the scene
+// estimator's, EstimateOptions::adaptive_belief_proposal) on, at the scene estimator's M = 100
+// and 15 iterations, with the unary in the products and as a pointwise factor (the scene's
+// rendered unary). The beliefs are then importance-weighted samples, so the tolerances follow
+// from their effective sample size E (the run-averaged smallest of the final beliefs), each at
+// a family-wise 0.1% over the C = nodes x dimensions cells:
+// - one run's mean misses the exact one by N(0, 1/E) sigma: the RMS over R runs of the worst
+//   cell stays below sqrt(q / (R E)), q the chi-square R-dof quantile at 1 - 0.001 / C
+//   (Wilson-Hilferty);
+// - the mean over R runs misses by N(0, 1/(R E)): at most z / sqrt(R E), z the two-sided
+//   normal quantile at 0.001 / C;
+// - the run-averaged variance ratio is within z sqrt(2 / (R E)) (a variance from E samples has
+//   relative error sqrt(2 / E)) of what belief propagation converges to: the exact marginal on
+//   a tree, on the loopy grid the Gaussian loopy-BP fixed point (its means are exact, its
+//   variances too small: Weiss & Freeman 2001), computed here by scalar Gaussian BP.
+struct SampleSizeTolerance {
+  double rms, averaged, variance;
+};
+
+double normal_upper_quantile(double tail) {
+  double lo = 0, hi = 10;
+  for (int k = 0; k < 100; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (0.5 * std::erfc(mid / std::sqrt(2.0)) > tail ? lo : hi) = mid;
+  }
+  return lo;
+}
+
+SampleSizeTolerance sample_size_tolerance(double ess, int runs, int cells) {
+  const double alpha = 1e-3 / cells;
+  const double z = normal_upper_quantile(alpha / 2);
+  const double r = runs, h = 2.0 / (9.0 * r);
+  const double chi2 = r * std::pow(1 - h + normal_upper_quantile(alpha) * std::sqrt(h), 3);
+  return {std::sqrt(chi2 / (r * ess)), z / std::sqrt(r * ess), z * std::sqrt(2.0 / (r * ess))};
+}
+
+// Gaussian loopy BP, one scalar problem per dimension (the model's covariances are diagonal):
+// the variance of each node's belief at the fixed point, as a ratio of the exact marginal's.
+// Returns the smallest and largest ratio over the cells.
+std::pair<double, double> loopy_bp_variance_ratios(const LinearGaussianModel& model) {
+  const std::vector<GaussianMarginal> exact = exact_gaussian_marginals(model);
+  const int n = static_cast<int>(model.observations.size());
+  double lo = 1e9, hi = 0;
+  for (int d = 0; d < model.dimension; ++d) {
+    // precision[s][t]: of the message s -> t (0 where there is no edge).
+    std::vector<std::vector<double>> precision(n, std::vector<double>(n, 0.0));
+    const double q = model.pairwise_variance[d];
+    for (int sweep = 0; sweep < 500; ++sweep) {
+      std::vector<std::vector<double>> next(n, std::vector<double>(n, 0.0));
+      for (const auto& [a, b] : model.edges) {
+        for (const auto& [s, t] : {std::pair<int, int>{a, b}, std::pair<int, int>{b, a}}) {
+          double cavity = 1 / model.unary_variances[s][d];
+          for (int u = 0; u < n; ++u)
+            if (u != t) cavity += precision[u][s];
+          next[s][t] = 1 / (q + 1 / cavity);
+        }
+      }
+      precision = next;
+    }
+    for (int s = 0; s < n; ++s) {
+      double belief = 1 / model.unary_variances[s][d];
+      for (int u = 0; u < n; ++u) belief += precision[u][s];
+      const double ratio = 1 / belief / exact[s].variance[d];
+      lo = std::min(lo, ratio);
+      hi = std::max(hi, ratio);
+    }
+  }
+  return {lo, hi};
+}
+
+void expect_within_sample_size(const char* name, const LinearGaussianModel& model,
+                               const GaussianAccuracy& a) {
+  print(name, a);
+  const int cells = static_cast<int>(model.observations.size()) * model.dimension;
+  const SampleSizeTolerance t = sample_size_tolerance(a.final_effective_sample_size, a.runs, cells);
+  const auto [bp_low, bp_high] = loopy_bp_variance_ratios(model);
+  std::printf("  final ESS %.1f: tolerances rms %.3f, averaged %.3f, variance ratio [%.3f, %.3f]\n",
+              a.final_effective_sample_size, t.rms, t.averaged, bp_low - t.variance,
+              bp_high + t.variance);
+  EXPECT_LE(a.rms_error_sigma, t.rms) << name;
+  EXPECT_LE(a.averaged_error_sigma, t.averaged) << name;
+  EXPECT_GE(a.min_variance_ratio, bp_low - t.variance) << name;
+  EXPECT_LE(a.max_variance_ratio, bp_high + t.variance) << name;
+}
+
+NbpOptions adaptive_options() {
+  NbpOptions options;
+  options.message_proposal = MessageProposal::kBeliefImportance;
+  options.particles = 100;
+  options.iterations = 15;
+  options.adaptive_belief_proposal = true;
+  options.proposal_min_variance = 1e-6;  // the scene's 0.5 mm against ~5 cm beliefs
+  return options;
+}
+
+TEST(Nbp, LoopyBpOfTheChainIsExact) {
+  // The reference of the variance tolerance: on a tree Gaussian BP is exact.
+  const auto [low, high] = loopy_bp_variance_ratios(chain_model());
+  EXPECT_NEAR(low, 1.0, 1e-9);
+  EXPECT_NEAR(high, 1.0, 1e-9);
+  const auto [grid_low, grid_high] = loopy_bp_variance_ratios(grid_model());
+  EXPECT_LT(grid_low, 1.0);  // loopy: too small
+  EXPECT_LE(grid_high, 1.0);
+}
+
+TEST(Nbp, AdaptiveProposalChainOfFive3DMatchesExactMarginals) {
+  const LinearGaussianModel model = chain_model();
+  for (const bool pointwise : {false, true}) {
+    expect_within_sample_size(
+        pointwise ? "chain, adaptive, pointwise unary" : "chain, adaptive", model,
+        measure_gaussian_accuracy(model, pointwise, adaptive_options(), kRuns, 1));
+  }
+}
+
+TEST(Nbp, AdaptiveProposalLoopyGrid2x2MatchesExactJointMarginals) {
+  const LinearGaussianModel model = grid_model();
+  for (const bool pointwise : {false, true}) {
+    expect_within_sample_size(
+        pointwise ? "grid, adaptive, pointwise unary" : "grid, adaptive", model,
+        measure_gaussian_accuracy(model, pointwise, adaptive_options(), kRuns, 1));
+  }
+}
+
+TEST(Nbp, PerMessageProductsWithAPointwiseUnaryMissTheChainEvenWithTheAdaptiveProposal) {
+  // What the scene estimator runs today (mrf_builder.cpp: the default kProductWithoutReceiver
+  // messages, the adaptive belief proposal, a pointwise unary): each message's samples come
+  // from its product without the receiver and only the unary's importance weights place them
+  // (ESS ~1 of 100), so the chain's messages are biased, not only noisy: the mean over 20 runs
+  // misses by ~0.57 sigma (0.48 at M = 200), against a sample-size tolerance of ~0.19. The
+  // belief-importance messages above meet it. Recorded here so that a change of the scene's
+  // proposal is a decision against a measured figure.
+  NbpOptions options = adaptive_options();
+  options.message_proposal = MessageProposal::kProductWithoutReceiver;
+  const LinearGaussianModel model = chain_model();
+  const GaussianAccuracy a = measure_gaussian_accuracy(model, true, options, kRuns, 1);
+  print("chain, adaptive, per-message products, pointwise unary", a);
+  const SampleSizeTolerance t =
+      sample_size_tolerance(a.final_effective_sample_size, a.runs, 5 * model.dimension);
+  EXPECT_GT(a.averaged_error_sigma, t.averaged);
 }
 
 TEST(Nbp, PointwiseUnaryThroughImportanceWeights) {

@@ -508,7 +508,8 @@ TEST_F(EstimateGl, SyntheticObservationTakesASensorPreset) {
 // generate --hidden: the synthetic detector gives every completely hidden object its amodal box,
 // so each gets an estimate, placed through the graph (the tray's support and the box's
 // silhouette), and none is confident while more than 2 cm off; with --no-amodal they have no
-// detection (the behaviour before amodal boxes).
+// detection (the behaviour before amodal boxes). The completely hidden ones are never confident:
+// their variance is at least the squared bandwidth floor.
 TEST(EstimateHiddenGl, CompletelyHiddenObjectsGetAnEstimateThroughTheGraph) {
   std::string why;
   if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
@@ -563,6 +564,20 @@ TEST(EstimateHiddenGl, CompletelyHiddenObjectsGetAnEstimateThroughTheGraph) {
   }
   std::sort(errors.begin(), errors.end());
   EXPECT_LT(errors[errors.size() / 2], 3.0) << "median error of the hidden objects (cm)";
+  // Issue 25: a completely hidden object is never confident, by construction, not by
+  // measurement. Its covariance is its belief's (the spread of the NBP samples plus their
+  // kernels, each at least the 5 mm bandwidth floor, --bandwidth-floor-mm) plus the model
+  // misfit, so every axis variance is >= (5 mm)^2 = 0.25 cm^2, the paper's threshold, and
+  // equal only if all samples coincide.
+  int unseen_estimated = 0;
+  for (const auto& row : read_csv(out / "estimates.csv")) {
+    if (!unseen.count(row.at(1) + "/" + row.at(2) + "/" + row.at(3)) || row.at(9).empty()) continue;
+    ++unseen_estimated;
+    for (int axis = 9; axis <= 11; ++axis)
+      EXPECT_GE(std::stod(row.at(axis)), 0.25 * (1 - 1e-6)) << row.at(2) << "/" << row.at(3);
+    EXPECT_EQ(row.at(15), "0") << "hidden and confident: " << row.at(2) << "/" << row.at(3);
+  }
+  EXPECT_EQ(unseen_estimated, static_cast<int>(unseen.size()));
   for (const auto& [key, value] : errors_of_hidden(plain)) {
     if (unseen.count(key)) {
       EXPECT_TRUE(value.first.empty()) << key << ": without amodal boxes it has no detection";

@@ -30,10 +30,13 @@ struct SceneEstimator::State {
 
   // Surface points of a model for ICP, fixed per obj_id (seeded by the id).
   const Eigen::Matrix3Xd& model_points(int obj_id);
+  // resolve_model_misfit of a split, resolved once per split.
+  const ModelMisfit& misfit_of(const std::string& split_folder);
 
   const datasets::BopDataset& dataset;
   EstimateOptions options;
-  ModelMisfit misfit;
+  ModelMisfit misfit;  // of the view being estimated (its split's misfit_of)
+  std::map<std::string, ModelMisfit> misfits;
   datasets::DeclaredNoise noise;  // resolve_pixel_noise
   render::EglContext context;
   render::Renderer renderer;

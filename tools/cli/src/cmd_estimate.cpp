@@ -68,8 +68,9 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
       "--model-misfit-mm", [&e](double mm) { e.misfit_translation_m = 1e-3 * mm; },
       "calibrated covariance: per-axis sigma of the offset between the model and the object its "
       "depth shows (scan and GT pose error; mm, >= 0), added to every estimate's covariance. "
-      "Default: the sensor's with --observation synthetic, else the dataset's sensor.json "
-      "(generated datasets), else 3 mm (real data)");
+      "Default: the sensor's with --observation synthetic, else 0 for a split rendered from the "
+      "models (*_pbr), else the dataset's sensor.json, else 0 for a generated dataset, else 3 mm "
+      "(real data; chosen on ycbv_real, see the README)");
   command.add_option_function<double>(
       "--model-misfit-deg", [&e](double deg) { e.misfit_rotation_deg = deg; },
       "the same for the model's rotation (per-axis sigma, degrees, >= 0; default as "

@@ -410,7 +410,7 @@ nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
   fingerprint["covariance"] = "full";
   fingerprint["min_detection_iou"] = e.min_detection_iou;
   // Always recorded (resolved): estimates of earlier versions assumed none.
-  const ModelMisfit misfit = resolve_model_misfit(e, dataset);
+  const ModelMisfit misfit = resolve_model_misfit(e, dataset, batch::split_folder(options.dataset));
   fingerprint["model_misfit_mm"] = 1e3 * misfit.translation_m;
   fingerprint["model_misfit_deg"] = misfit.rotation_deg;
   fingerprint["model_misfit_source"] = misfit.source;

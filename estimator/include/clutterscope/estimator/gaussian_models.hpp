@@ -53,6 +53,9 @@ struct GaussianAccuracy {
   // Run-averaged smallest effective sample size of any weighted product (messages included):
   // 1 / sqrt of it is the Monte-Carlo error to expect from importance weighting.
   double min_effective_sample_size = 0;
+  // Run-averaged smallest effective sample size of the final beliefs: the samples the belief
+  // moments are computed from.
+  double final_effective_sample_size = 0;
   double seconds_per_run = 0;
 };
 
