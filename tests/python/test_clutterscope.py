@@ -40,7 +40,7 @@ def bad_copy(tray6, tmp_path):
 
 def test_dataset_lists_the_selection_and_views_an_image(tray6):
     ds = clutterscope.Dataset(tray6, scenes="1-2")
-    assert ds.scene_ids == [1, 2, 3, 4, 5, 6] or ds.scene_ids[0] in (0, 1)
+    assert ds.scene_ids == sorted(int(p.name) for p in (tray6 / "test").iterdir())
     assert ds.scenes == [1, 2]
     assert ds.images == [(1, 0), (2, 0)]
     view = ds.image(1, 0)

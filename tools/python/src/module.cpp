@@ -8,6 +8,7 @@
 #include <pybind11/stl.h>
 
 #include <atomic>
+#include <chrono>
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/dataset_selection.hpp>
 #include <clutterscope/batch/table_layouts.hpp>
@@ -26,10 +27,12 @@
 #include <clutterscope/visibility/visibility_job.hpp>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -40,10 +43,6 @@ namespace clutterscope::python {
 namespace {
 
 namespace fs = std::filesystem;
-
-py::object to_python(const nlohmann::json& json) {
-  return py::module_::import("json").attr("loads")(json.dump());
-}
 
 py::object to_python(const nlohmann::ordered_json& json) {
   return py::module_::import("json").attr("loads")(json.dump());
@@ -163,6 +162,92 @@ std::pair<py::array_t<float>, py::array_t<std::int32_t>> render_depth(
   return {image_array<float>(image.depth), image_array<std::int32_t>(image.labels)};
 }
 
+// Runs a job on a thread of its own while the calling (Python) thread waits with the GIL
+// released, waking every 100 ms to check for signals: Python runs its signal handlers on the
+// main thread only, so Ctrl-C (KeyboardInterrupt) is seen there and cancels the job through
+// cancelled(). The job's progress reports are handed to the Python callable on this thread, as
+// is an exception it raises (which cancels the job too). The Python exception, or else the
+// job's, is rethrown once the job has stopped: its finished images stay persisted for a
+// resume.
+class Monitor {
+ public:
+  explicit Monitor(py::object callback) : callback_(std::move(callback)) {}
+
+  // Thread-safe, for the job's progress callback.
+  void report(std::size_t done, std::size_t total) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    done_ = done;
+    total_ = total;
+    changed_ = true;
+  }
+  bool cancelled() const { return cancelled_.load(); }
+
+  template <class Result>
+  Result run(const std::function<Result()>& job) {
+    std::optional<Result> result;
+    std::exception_ptr job_error;
+    std::atomic<bool> finished{false};
+    {
+      py::gil_scoped_release release;
+      std::thread thread([&] {
+        try {
+          result = job();
+        } catch (...) {
+          job_error = std::current_exception();
+        }
+        finished = true;
+      });
+      while (!finished) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        const py::gil_scoped_acquire gil;
+        poll();
+      }
+      thread.join();
+    }
+    poll();  // the last report
+    // A cancelled job may stop with an error of its own: the cause is the Python one.
+    if (python_error_) throw py::error_already_set(*python_error_);
+    if (job_error) std::rethrow_exception(job_error);
+    return *result;
+  }
+
+ private:
+  // With the GIL held: a pending signal, then the latest report to the callable.
+  void poll() {
+    if (cancelled_) return;
+    if (PyErr_CheckSignals() != 0) {
+      cancel();
+      return;
+    }
+    std::size_t done = 0, total = 0;
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      if (!changed_) return;
+      changed_ = false;
+      done = done_;
+      total = total_;
+    }
+    if (callback_.is_none()) return;
+    try {
+      callback_(done, total);
+    } catch (py::error_already_set& error) {
+      error.restore();
+      cancel();
+    }
+  }
+  void cancel() {
+    python_error_ = std::make_shared<py::error_already_set>();  // fetches the raised error
+    cancelled_ = true;
+  }
+
+  py::object callback_;
+  std::mutex mutex_;
+  std::size_t done_ = 0, total_ = 0;
+  bool changed_ = false;
+  std::atomic<bool> cancelled_{false};
+  std::shared_ptr<py::error_already_set> python_error_;
+};
+
 // What a batch run did, for Python.
 py::dict result_dict(const batch::BatchResult& result, const fs::path& out) {
   py::dict dict;
@@ -262,31 +347,25 @@ scene_estimation::EvaluateJobOptions evaluate_options(const Dataset& dataset, co
 
 py::dict run_visibility(const Dataset& dataset, const py::dict& kw) {
   const visibility::VisibilityJobOptions options = visibility_options(dataset, kw);
-  batch::BatchResult result;
-  {
-    py::gil_scoped_release release;
-    result = visibility::run_visibility_job(options);
-  }
+  Monitor monitor(kw["progress"]);
+  const batch::BatchResult result = monitor.run<batch::BatchResult>(
+      [&options] { return visibility::run_visibility_job(options); });
   return result_dict(result, options.dataset.out);
 }
 
 py::dict run_estimate(const Dataset& dataset, const py::dict& kw) {
   const scene_estimation::EstimateJobOptions options = estimate_options(dataset, kw);
-  batch::BatchResult result;
-  {
-    py::gil_scoped_release release;
-    result = scene_estimation::run_estimate_job(options);
-  }
+  Monitor monitor(kw["progress"]);
+  const batch::BatchResult result = monitor.run<batch::BatchResult>(
+      [&options] { return scene_estimation::run_estimate_job(options); });
   return result_dict(result, options.dataset.out);
 }
 
 py::dict run_evaluate(const Dataset& dataset, const py::dict& kw) {
   const scene_estimation::EvaluateJobOptions options = evaluate_options(dataset, kw);
-  batch::BatchResult result;
-  {
-    py::gil_scoped_release release;
-    result = scene_estimation::run_evaluate_job(options);
-  }
+  Monitor monitor(kw["progress"]);
+  const batch::BatchResult result = monitor.run<batch::BatchResult>(
+      [&options] { return scene_estimation::run_evaluate_job(options); });
   return result_dict(result, options.dataset.out);
 }
 
@@ -362,11 +441,9 @@ py::dict run_report(const Dataset& dataset, const py::dict& kw) {
     job.save_beliefs = true;
     return scene_estimation::run_estimate_job(job);
   };
-  report::ReportRun run;
-  {
-    py::gil_scoped_release release;
-    run = report::run_report(options, steps);
-  }
+  Monitor monitor(kw["progress"]);
+  const report::ReportRun run =
+      monitor.run<report::ReportRun>([&] { return report::run_report(options, steps); });
   py::dict result;
   result["out"] = options.dataset.out;
   result["exit_code"] = run.exit_code;
