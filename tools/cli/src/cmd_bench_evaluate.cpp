@@ -17,9 +17,9 @@
 #include <clutterscope/datasets/bop_results.hpp>
 #include <clutterscope/datasets/files.hpp>
 #include <clutterscope/estimator/bop_pose_errors.hpp>
+#include <clutterscope/jobs/evaluate_job.hpp>
 #include <clutterscope/render/bop_renderer.hpp>
 #include <clutterscope/render/context.hpp>
-#include <clutterscope/scene_estimation/evaluate_job.hpp>
 #include <clutterscope/visibility/image_visibility.hpp>
 #include <clutterscope/visibility/scene_gt_info.hpp>
 #include <cmath>
@@ -123,8 +123,7 @@ std::string write_gt_info_and_targets(DenseWorkload* workload, const DenseWorklo
         root / "test" / datasets::six_digits(scene_id) / "scene_gt_info.json",
         visibility::scene_gt_info_json(images));
   }
-  datasets::write_file_atomically(root / scene_estimation::kBop19TargetsFile,
-                                  targets.dump() + "\n");
+  datasets::write_file_atomically(root / jobs::kBop19TargetsFile, targets.dump() + "\n");
   add_symmetries(root / "models" / "models_info.json");
   return renderer_name;
 }
@@ -233,14 +232,14 @@ struct EvaluateRun {
   double cpu_seconds = 0;       // the process's CPU time meanwhile
   double item_seconds = 0;      // the per-image function's time, summed over the images
   double runnable_seconds = 0;  // RunnableTime over the run
-  scene_estimation::EvaluateStageTimes stages;
+  jobs::EvaluateStageTimes stages;
   fs::path out;
 };
 
 EvaluateRun run_evaluation(const fs::path& root, const fs::path& results, const fs::path& out,
                            int jobs, const std::vector<std::string>& errors,
                            const std::string& images, bool windows) {
-  scene_estimation::EvaluateJobOptions options;
+  jobs::EvaluateJobOptions options;
   options.dataset.dataset = (root / "dense").string();
   options.dataset.out = out.string();
   options.dataset.jobs = jobs;
@@ -260,7 +259,7 @@ EvaluateRun run_evaluation(const fs::path& root, const fs::path& results, const 
   const BenchClock::time_point start = BenchClock::now();
   const double cpu_start = process_cpu_seconds();
   RunnableTime runnable;
-  const batch::BatchResult result = scene_estimation::run_evaluate_job(options);
+  const batch::BatchResult result = jobs::run_evaluate_job(options);
   run.runnable_seconds = runnable.stop();
   run.seconds = seconds_since(start);
   run.item_seconds = result.seconds_per_item * static_cast<double>(result.computed);
@@ -291,7 +290,7 @@ double median_of(std::vector<double> values) {
 
 // The time per estimate of each error and of the rest, from a --jobs 1 run on every image.
 void print_breakdown(const EvaluateRun& one, const DenseWorkload& workload, int images) {
-  const scene_estimation::EvaluateStageTimes& s = one.stages;
+  const jobs::EvaluateStageTimes& s = one.stages;
   // MSSD and MSPD cost one transform of every vertex per symmetry transformation.
   const std::vector<std::size_t> symmetries = symmetry_counts(workload.models_mm.size());
   double point_transforms = 0;

@@ -1,9 +1,9 @@
-// `clutterscope estimate`: flags -> scene_estimation::EstimateJobOptions -> the estimate job
-// (scene_estimation/estimate_job.hpp). Also the estimator's flags, shared with the commands
+// `clutterscope estimate`: flags -> jobs::EstimateJobOptions -> the estimate job
+// (jobs/estimate_job.hpp). Also the estimator's flags, shared with the commands
 // that estimate (bench calibration, simulate).
 
 #include <clutterscope/cli/dataset_options.hpp>
-#include <clutterscope/scene_estimation/estimate_job.hpp>
+#include <clutterscope/jobs/estimate_job.hpp>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -142,7 +142,7 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
       ->capture_default_str();
 }
 
-void add_estimate_options(CLI::App& command, scene_estimation::EstimateJobOptions* arguments) {
+void add_estimate_options(CLI::App& command, jobs::EstimateJobOptions* arguments) {
   add_dataset_options(command, &arguments->dataset);
   add_estimator_options(command, arguments->estimate);
   command
@@ -160,7 +160,7 @@ void add_estimate_options(CLI::App& command, scene_estimation::EstimateJobOption
 }
 
 void add_estimate_command(CLI::App& app, int* exit_code) {
-  auto options = std::make_shared<scene_estimation::EstimateJobOptions>();
+  auto options = std::make_shared<jobs::EstimateJobOptions>();
   CLI::App* command = app.add_subcommand(
       "estimate",
       "Scene estimation by nonparametric belief propagation (paper §III): object positions "
@@ -169,9 +169,8 @@ void add_estimate_command(CLI::App& app, int* exit_code) {
       "results_bop.csv (BOP 6D results), summary.json and, with --save-beliefs, "
       "beliefs/SPLIT/SCENE/IMID.csv.");
   add_estimate_options(*command, options.get());
-  command->callback([options, exit_code] {
-    *exit_code = scene_estimation::run_estimate_job(*options).exit_code();
-  });
+  command->callback(
+      [options, exit_code] { *exit_code = jobs::run_estimate_job(*options).exit_code(); });
 }
 
 }  // namespace clutterscope::cli

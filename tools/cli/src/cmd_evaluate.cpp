@@ -1,11 +1,11 @@
-// `clutterscope evaluate`: flags -> scene_estimation::EvaluateJobOptions -> the evaluate job
-// (scene_estimation/evaluate_job.hpp).
+// `clutterscope evaluate`: flags -> jobs::EvaluateJobOptions -> the evaluate job
+// (jobs/evaluate_job.hpp).
 
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/cli/dataset_options.hpp>
+#include <clutterscope/jobs/evaluate_job.hpp>
 #include <clutterscope/report/by_visibility.hpp>
-#include <clutterscope/scene_estimation/evaluate_job.hpp>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -52,8 +52,8 @@ std::string joined(const std::vector<double>& values) {
 
 }  // namespace
 
-scene_estimation::EvaluateJobOptions EvaluateFlags::options() const {
-  scene_estimation::EvaluateJobOptions options = job;
+jobs::EvaluateJobOptions EvaluateFlags::options() const {
+  jobs::EvaluateJobOptions options = job;
   if (!correct.empty()) parse_correct_rule(correct, &options.by_visibility);
   // An explicit --models-dir is used as given; otherwise models_eval where it exists.
   options.prefer_models_eval = !models_dir_given;
@@ -61,7 +61,7 @@ scene_estimation::EvaluateJobOptions EvaluateFlags::options() const {
 }
 
 void add_evaluate_options(CLI::App& command, EvaluateFlags* flags) {
-  scene_estimation::EvaluateJobOptions* options = &flags->job;
+  jobs::EvaluateJobOptions* options = &flags->job;
   add_dataset_options(command, &options->dataset);
   command.get_option("--models-dir")->each([flags](const std::string&) {
     flags->models_dir_given = true;
@@ -134,9 +134,8 @@ void add_evaluate_command(CLI::App& app, int* exit_code) {
       "object or image not in the dataset, times of one image more than 1 ms apart) are "
       "refused naming file, line and field.");
   add_evaluate_options(*command, flags.get());
-  command->callback([flags, exit_code] {
-    *exit_code = scene_estimation::run_evaluate_job(flags->options()).exit_code();
-  });
+  command->callback(
+      [flags, exit_code] { *exit_code = jobs::run_evaluate_job(flags->options()).exit_code(); });
 }
 
 }  // namespace clutterscope::cli

@@ -1,10 +1,10 @@
 #include <algorithm>
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/output_folder.hpp>
-#include <clutterscope/report/report_job.hpp>
-#include <clutterscope/scene_estimation/estimate_job.hpp>
-#include <clutterscope/scene_estimation/evaluate_job.hpp>
-#include <clutterscope/visibility/visibility_job.hpp>
+#include <clutterscope/jobs/estimate_job.hpp>
+#include <clutterscope/jobs/evaluate_job.hpp>
+#include <clutterscope/jobs/report_job.hpp>
+#include <clutterscope/jobs/visibility_job.hpp>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -41,9 +41,8 @@ void add_merge_command(CLI::App& app, int* exit_code) {
     batch::MergeOptions options;
     options.inputs.assign(arguments->inputs.begin(), arguments->inputs.end());
     options.out_dir = arguments->out;
-    options.outputs = {visibility::visibility_output_spec(),
-                       scene_estimation::estimate_output_spec(),
-                       scene_estimation::evaluate_output_spec()};
+    options.outputs = {jobs::visibility_output_spec(), jobs::estimate_output_spec(),
+                       jobs::evaluate_output_spec()};
     options.quiet = arguments->quiet;
     const bool reports = std::any_of(options.inputs.begin(), options.inputs.end(),
                                      [](const std::filesystem::path& input) {
@@ -54,7 +53,7 @@ void add_merge_command(CLI::App& app, int* exit_code) {
       *exit_code = batch::merge_batches(options).exit_code();
       return;
     }
-    *exit_code = report::merge_report_shards(options).exit_code();
+    *exit_code = jobs::merge_report_shards(options).exit_code();
     if (!options.quiet) {
       std::cerr << "merged the report shards into " << options.out_dir.string()
                 << ": run the report command of the shards without --shard into it to write "

@@ -1,8 +1,8 @@
 // `clutterscope notebook DIR`: writes DIR/clutter_report.ipynb over an existing report folder.
 
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/jobs/report_job.hpp>
 #include <clutterscope/notebooks_export/notebook.hpp>
-#include <clutterscope/report/report_job.hpp>
 #include <iostream>
 #include <memory>
 
@@ -22,10 +22,9 @@ void run_notebook_command(const NotebookCommandOptions& options) {
   notebook.generator = std::string("clutterscope ") + CLUTTERSCOPE_VERSION;
   std::string why;
   if (!notebook.IsValid(&why)) throw CLI::ValidationError("notebook", why);  // NaN slips CLI11
-  const report::ReportNotebook written =
-      report::write_report_notebook(options.report_dir, notebook);
+  const jobs::ReportNotebook written = jobs::write_report_notebook(options.report_dir, notebook);
   const notebooks_export::NotebookSummary& summary = written.written;
-  if (!written.kept.empty()) std::cerr << report::notebook_kept_message(written) << "\n";
+  if (!written.kept.empty()) std::cerr << jobs::notebook_kept_message(written) << "\n";
   std::cout << "wrote " << summary.path.string() << " (" << summary.code_cells << " code and "
             << summary.markdown_cells << " markdown cells); open it in Jupyter, or run it "
             << "headless: jupyter nbconvert --to notebook --execute " << summary.path.string()

@@ -1,5 +1,5 @@
-// `clutterscope report`: flags -> report::ReportJobOptions and the visibility and estimate
-// jobs' Options -> report::run_report (report/report_job.hpp), which calls the jobs bound here.
+// `clutterscope report`: flags -> jobs::ReportJobOptions and the visibility and estimate
+// jobs' Options -> jobs::run_report (jobs/report_job.hpp), which calls the jobs bound here.
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -7,10 +7,10 @@
 #include <clutterscope/batch/input_digest.hpp>
 #include <clutterscope/cli/dataset_options.hpp>
 #include <clutterscope/datasets/files.hpp>
+#include <clutterscope/jobs/evaluate_job.hpp>
+#include <clutterscope/jobs/report_job.hpp>
 #include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/report/evaluation.hpp>
-#include <clutterscope/report/report_job.hpp>
-#include <clutterscope/scene_estimation/evaluate_job.hpp>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -64,7 +64,7 @@ const std::vector<StepOption>& step_options() {
   static const std::vector<StepOption> options = [] {
     std::vector<StepOption> list;
     VisibilityFlags visibility;
-    scene_estimation::EstimateJobOptions estimate;
+    jobs::EstimateJobOptions estimate;
     CLI::App visibility_app, estimate_app;
     add_visibility_options(visibility_app, &visibility);
     add_estimate_options(estimate_app, &estimate);
@@ -126,7 +126,7 @@ void append_dataset_layout_options(const DatasetOptions& dataset, std::vector<st
   if (!dataset.targets.empty()) line->insert(line->end(), {"--targets", dataset.targets});
 }
 
-void append_given(const report::GivenOptions& given, std::vector<std::string>* line) {
+void append_given(const jobs::GivenOptions& given, std::vector<std::string>* line) {
   for (const auto& [name, value] : given) {
     line->push_back(name);
     if (!value.empty()) line->push_back(value);
@@ -136,7 +136,7 @@ void append_given(const report::GivenOptions& given, std::vector<std::string>* l
 // The command line of one step as `clutterscope STEP` would take it: "STEP DATASET --out
 // DIR/STEP", the dataset selection, --jobs, --keep-going, --quiet and the given options; for
 // estimate also the report's threshold, seed and radius, which are the estimator's too.
-std::vector<std::string> step_command_line(const report::ReportJobOptions& options,
+std::vector<std::string> step_command_line(const jobs::ReportJobOptions& options,
                                            const std::string& step) {
   const DatasetOptions& dataset = options.dataset;
   std::vector<std::string> line = {
@@ -186,7 +186,7 @@ class BoundSteps {
  public:
   // Parses and validates both steps' options and reads the dataset selection (its scenes,
   // images, targets and detections), throwing before anything is written.
-  explicit BoundSteps(const report::ReportJobOptions& options) {
+  explicit BoundSteps(const jobs::ReportJobOptions& options) {
     parse_step_flags(step_command_line(options, "estimate"), &add_estimate_options, &estimate_);
     VisibilityFlags visibility;
     parse_step_flags(step_command_line(options, "visibility"), &add_visibility_options,
@@ -197,18 +197,17 @@ class BoundSteps {
     std::string why;
     if (!visibility_.IsValid(&why) || !estimate_.IsValid(&why)) throw batch::UsageError(why);
     datasets::BopDataset dataset = batch::open_dataset(options.dataset);
-    if (!estimate_.detections.empty() &&
-        estimate_.detections != scene_estimation::kSyntheticDetections) {
+    if (!estimate_.detections.empty() && estimate_.detections != jobs::kSyntheticDetections) {
       dataset.attach_detections(estimate_.detections);
     }
     batch::list_selected_images(dataset, options.dataset);
-    visibility_fingerprint_ = visibility::visibility_job_fingerprint(visibility_);
-    estimate_fingerprint_ = scene_estimation::estimate_job_fingerprint(estimate_, dataset);
+    visibility_fingerprint_ = jobs::visibility_job_fingerprint(visibility_);
+    estimate_fingerprint_ = jobs::estimate_job_fingerprint(estimate_, dataset);
     if (!options.results.empty()) bind_evaluate(options);
   }
 
-  report::ReportSteps steps() const {
-    report::ReportSteps steps;
+  jobs::ReportSteps steps() const {
+    jobs::ReportSteps steps;
     steps.renderer = render::renderer_in_use;
     steps.visibility_options = visibility_fingerprint_;
     steps.estimate_options = estimate_fingerprint_;
@@ -217,33 +216,33 @@ class BoundSteps {
       steps.evaluate = [this](const std::filesystem::path& out,
                               const std::filesystem::path& bundled_results,
                               const std::filesystem::path& images_csv) {
-        scene_estimation::EvaluateJobOptions job = *evaluate_;
+        jobs::EvaluateJobOptions job = *evaluate_;
         job.dataset.out = out.string();
         job.results.push_back(bundled_results.string());
         job.scene_visibility_images = images_csv.string();
-        return scene_estimation::run_evaluate_job(job);
+        return jobs::run_evaluate_job(job);
       };
     }
     steps.visibility = [this](const std::filesystem::path& out) {
-      visibility::VisibilityJobOptions job = visibility_;
+      jobs::VisibilityJobOptions job = visibility_;
       job.dataset.out = out.string();
-      return visibility::run_visibility_job(job);
+      return jobs::run_visibility_job(job);
     };
     steps.estimate = [this](const std::filesystem::path& out) {
-      scene_estimation::EstimateJobOptions job = estimate_;
+      jobs::EstimateJobOptions job = estimate_;
       job.dataset.out = out.string();
-      return scene_estimation::run_estimate_job(job);
+      return jobs::run_estimate_job(job);
     };
     // The estimate step's options on one image, alone on one worker, quietly.
     steps.beliefs = [this](const datasets::ImageKey& image, const std::filesystem::path& out) {
-      scene_estimation::EstimateJobOptions job = estimate_;
+      jobs::EstimateJobOptions job = estimate_;
       job.dataset.out = out.string();
       job.dataset.scenes = std::to_string(image.scene_id);
       job.dataset.images = std::to_string(image.im_id);
       job.dataset.jobs = 1;
       job.dataset.quiet = true;
       job.save_beliefs = true;
-      return scene_estimation::run_estimate_job(job);
+      return jobs::run_estimate_job(job);
     };
     return steps;
   }
@@ -252,10 +251,10 @@ class BoundSteps {
   // The evaluate step: its options parsed as `evaluate` parses them and every check evaluate
   // makes before it computes (the results files line by line among them), so that bad input
   // is refused before any step runs.
-  void bind_evaluate(const report::ReportJobOptions& options) {
+  void bind_evaluate(const jobs::ReportJobOptions& options) {
     EvaluateFlags flags;
     parse_step_flags(step_command_line(options, "evaluate"), &add_evaluate_options, &flags);
-    scene_estimation::EvaluateJobOptions evaluate = flags.options();
+    jobs::EvaluateJobOptions evaluate = flags.options();
     std::string why;
     if (!evaluate.IsValid(&why)) throw batch::UsageError(why);
     nlohmann::json results = nlohmann::json::array();
@@ -269,7 +268,7 @@ class BoundSteps {
       results.push_back({{"name", name},
                          {"xxh64", batch::format_hex64(batch::xxh64(datasets::read_file(file)))}});
     }
-    scene_estimation::check_evaluate_job(evaluate);
+    jobs::check_evaluate_job(evaluate);
     std::vector<std::string> errors = evaluate.errors;
     std::sort(errors.begin(), errors.end());
     const report::ByVisibilityOptions& by_visibility = evaluate.by_visibility;
@@ -285,21 +284,21 @@ class BoundSteps {
     evaluate_ = std::move(evaluate);
   }
 
-  scene_estimation::EstimateJobOptions estimate_;
-  visibility::VisibilityJobOptions visibility_;
-  std::optional<scene_estimation::EvaluateJobOptions> evaluate_;
+  jobs::EstimateJobOptions estimate_;
+  jobs::VisibilityJobOptions visibility_;
+  std::optional<jobs::EvaluateJobOptions> evaluate_;
   nlohmann::json visibility_fingerprint_, estimate_fingerprint_, evaluate_fingerprint_;
 };
 
 struct ReportCommandState {
-  report::ReportJobOptions options;
+  jobs::ReportJobOptions options;
   std::map<std::string, std::string> values;  // forwarded value options as typed
   std::map<std::string, bool> flags;
   bool no_notebook = false;
 };
 
 void run_report_command(CLI::App& command, ReportCommandState& state, int* exit_code) {
-  report::ReportJobOptions options = state.options;
+  jobs::ReportJobOptions options = state.options;
   options.notebook = !state.no_notebook;
   for (const StepOption& option : step_options()) {
     if (command.get_option(option.name)->count() == 0) continue;
@@ -322,7 +321,7 @@ void run_report_command(CLI::App& command, ReportCommandState& state, int* exit_
   // Every option of both steps is checked before either step starts work.
   const BoundSteps steps(options);
   // Each step's runner reports its computed and reused images on stderr (and in run.json).
-  const report::ReportRun run = report::run_report(options, steps.steps());
+  const jobs::ReportRun run = jobs::run_report(options, steps.steps());
   if (run.shard_only) {
     std::cerr << run.console_summary;
   } else {
@@ -335,7 +334,7 @@ void run_report_command(CLI::App& command, ReportCommandState& state, int* exit_
 
 void add_report_command(CLI::App& app, int* exit_code) {
   auto state = std::make_shared<ReportCommandState>();
-  report::ReportJobOptions& options = state->options;
+  jobs::ReportJobOptions& options = state->options;
   CLI::App* command = app.add_subcommand(
       "report",
       "The clutter report of a dataset: runs visibility and estimation into DIR/visibility and "

@@ -1,9 +1,9 @@
-// `clutterscope simulate`: flags -> simulation::SimulateOptions -> the unloading run
-// (simulation/simulate_run.hpp); prints each run's outcome and the comparison table.
+// `clutterscope simulate`: flags -> jobs::SimulateOptions -> the unloading run
+// (jobs/simulate_run.hpp); prints each run's outcome and the comparison table.
 
 #include <clutterscope/batch/batch.hpp>
+#include <clutterscope/jobs/simulate_run.hpp>
 #include <clutterscope/scene_estimation/scene_estimate.hpp>
-#include <clutterscope/simulation/simulate_run.hpp>
 #include <cmath>
 #include <exception>
 #include <iostream>
@@ -21,7 +21,7 @@ namespace {
 
 // The run's options, with --compare-thresholds as given ("T1,T2,...").
 struct Arguments {
-  simulation::SimulateOptions options;
+  jobs::SimulateOptions options;
   std::string compare;
   bool quiet = false;
 };
@@ -50,7 +50,7 @@ std::vector<double> parse_thresholds(const std::string& text) {
 std::string describe(const simulation::UnloadingResult& result, double threshold,
                      const std::vector<std::string>& labels) {
   std::ostringstream out;
-  out << "threshold " << simulation::threshold_text(threshold)
+  out << "threshold " << jobs::threshold_text(threshold)
       << " cm^2: " << simulation::to_string(result.stop) << " after " << result.rounds.size()
       << " round(s), " << result.picks << " pick(s), " << result.failed_picks << " failed, "
       << result.left.size() << " object(s) left\n";
@@ -65,16 +65,15 @@ std::string describe(const simulation::UnloadingResult& result, double threshold
 }
 
 void run_simulate(const Arguments& arguments) {
-  simulation::SimulateOptions options = arguments.options;
+  jobs::SimulateOptions options = arguments.options;
   std::string why;
   if (!options.IsValid(&why)) throw batch::UsageError(why);
   if (!arguments.compare.empty()) options.compare_thresholds = parse_thresholds(arguments.compare);
-  const auto print_run = [&](const simulation::SimulateRun& run,
-                             const std::vector<std::string>& labels) {
+  const auto print_run = [&](const jobs::SimulateRun& run, const std::vector<std::string>& labels) {
     if (!arguments.quiet)
       std::cout << describe(run.result, run.threshold_cm2, labels) << std::flush;
   };
-  const simulation::SimulateSummary summary = simulation::run_simulation(options, print_run);
+  const jobs::SimulateSummary summary = jobs::run_simulation(options, print_run);
   if (!arguments.compare.empty() && !arguments.quiet)
     std::cout << "\n" << summary.compare_csv << std::flush;
 }

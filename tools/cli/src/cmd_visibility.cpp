@@ -1,8 +1,8 @@
-// `clutterscope visibility`: flags -> visibility::VisibilityJobOptions -> the visibility job
-// (visibility/visibility_job.hpp).
+// `clutterscope visibility`: flags -> jobs::VisibilityJobOptions -> the visibility job
+// (jobs/visibility_job.hpp).
 
 #include <clutterscope/cli/dataset_options.hpp>
-#include <clutterscope/visibility/visibility_job.hpp>
+#include <clutterscope/jobs/visibility_job.hpp>
 #include <memory>
 #include <string>
 
@@ -11,8 +11,8 @@
 
 namespace clutterscope::cli {
 
-visibility::VisibilityJobOptions VisibilityFlags::options() const {
-  visibility::VisibilityJobOptions options = job;
+jobs::VisibilityJobOptions VisibilityFlags::options() const {
+  jobs::VisibilityJobOptions options = job;
   options.visibility.mode = *visibility::parse_visibility_mode(mode);
   options.visibility.pixel_center =
       pixel_center == "integer" ? render::PixelCenter::kInteger : render::PixelCenter::kHalfPixel;
@@ -55,9 +55,8 @@ void add_visibility_command(CLI::App& app, int* exit_code) {
       "measured depth (bop19, bop18). Writes objects.csv, images.csv, summary.json and, on "
       "request, BOP scene_gt_info.json, masks and overlay pictures.");
   add_visibility_options(*command, flags.get());
-  command->callback([flags, exit_code] {
-    *exit_code = visibility::run_visibility_job(flags->options()).exit_code();
-  });
+  command->callback(
+      [flags, exit_code] { *exit_code = jobs::run_visibility_job(flags->options()).exit_code(); });
 }
 
 }  // namespace clutterscope::cli

@@ -5,9 +5,9 @@
 // exit code (0, or 1 for --keep-going failures) is stored in *exit_code.
 
 #include <CLI/CLI.hpp>
-#include <clutterscope/scene_estimation/estimate_job.hpp>
-#include <clutterscope/scene_estimation/evaluate_job.hpp>
-#include <clutterscope/visibility/visibility_job.hpp>
+#include <clutterscope/jobs/estimate_job.hpp>
+#include <clutterscope/jobs/evaluate_job.hpp>
+#include <clutterscope/jobs/visibility_job.hpp>
 #include <string>
 
 namespace clutterscope::cli {
@@ -25,25 +25,25 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
 // The flags of `visibility`: the job's options, with --mode and --pixel-center as the names
 // CLI11 checked.
 struct VisibilityFlags {
-  visibility::VisibilityJobOptions job;
+  jobs::VisibilityJobOptions job;
   std::string mode = "rendered";
   std::string pixel_center = "half";
   // The job's options with the mode and pixel centre that the names select.
-  visibility::VisibilityJobOptions options() const;
+  jobs::VisibilityJobOptions options() const;
 };
 // Every option of `visibility` (the dataset selection included) and of `estimate`, without
 // the command itself: `report` parses its steps' options with these, so a forwarded value is
 // validated exactly as the step's own command validates it.
 void add_visibility_options(CLI::App& command, VisibilityFlags* flags);
-void add_estimate_options(CLI::App& command, scene_estimation::EstimateJobOptions* options);
+void add_estimate_options(CLI::App& command, jobs::EstimateJobOptions* options);
 
 // The flags of `evaluate`: the job's options, with --correct as typed.
 struct EvaluateFlags {
-  scene_estimation::EvaluateJobOptions job;
+  jobs::EvaluateJobOptions job;
   std::string correct;            // --correct METRIC:THRESHOLD; empty: the default rule
   bool models_dir_given = false;  // --models-dir given: no models_eval preference
   // The job's options with --correct parsed (batch::UsageError when malformed).
-  scene_estimation::EvaluateJobOptions options() const;
+  jobs::EvaluateJobOptions options() const;
 };
 // Every option of `evaluate` (the dataset selection included), for `evaluate` and for the
 // evaluate step of `report --results`.

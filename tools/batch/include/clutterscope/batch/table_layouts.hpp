@@ -44,7 +44,7 @@ const TableLayout& bop_results_table();
 // `estimate --save-beliefs`: beliefs/SPLIT/SCENE/IMID.csv, the belief samples per iteration.
 const TableLayout& belief_samples_table();
 // `evaluate`: errors.csv, one row per evaluated estimate and GT instance of its object (BOP
-// 2019 pose errors; see scene_estimation/evaluate_job.hpp).
+// 2019 pose errors; see jobs/evaluate_job.hpp).
 const TableLayout& evaluate_errors_table();
 // `report`: objects.csv, the visibility columns joined with the estimate columns.
 const TableLayout& report_objects_table();

@@ -5,8 +5,8 @@
 // DIR/visibility (their batch runners resume finished images and refuse a different job), then
 // joins and analyses their tables and writes the report files into DIR.
 //
-// The report library links no GL, so it does not call the jobs itself: the front end binds them
-// (ReportSteps, filled by the CLI from the flags with the jobs' Options structs), as COLMAP's
+// run_report does not call the jobs itself: the front end binds them (ReportSteps, filled by the
+// CLI from the flags with the jobs' Options structs; the tests bind fakes), as COLMAP's
 // controllers receive their steps.
 //
 // The belief figures (paper Fig. 2 d-f, Fig. 3) need belief samples, which the estimate step
@@ -36,7 +36,7 @@
 #include <string>
 #include <vector>
 
-namespace clutterscope::report {
+namespace clutterscope::jobs {
 
 // Options given on the command line for one step, by option name ("--mode") with the value as
 // typed ("" for flags): what the front end forwards, so each step keeps its own defaults.
@@ -46,7 +46,7 @@ struct ReportJobOptions {
   batch::DatasetOptions dataset;  // out: the report folder
   // The variance threshold, the confidence radius and the seed are the estimate step's too, so
   // that "confident" and the random streams mean the same in DIR/estimate and in the report.
-  ReportOptions analysis;
+  report::ReportOptions analysis;
   bool notebook = true;  // also write DIR/clutter_report.ipynb
   // --results: BOP 2019 results files evaluated beside the bundled estimator's results_bop.csv
   // (method kBundledMethod, evaluation.hpp) by an evaluate step into DIR/evaluate, after the
@@ -96,7 +96,7 @@ struct StepRun {
 struct ReportRun {
   // estimate, visibility, evaluate (with --results), beliefs (the belief figures' images)
   std::vector<StepRun> steps;
-  ReportFiles files;
+  report::ReportFiles files;
   std::string console_summary;  // format_console_summary; for a shard, what to run next
   int exit_code = 0;            // 1 when images failed under --keep-going
   bool shard_only = false;      // --shard: the steps ran on the shard, no report files
@@ -150,4 +150,4 @@ ReportRun run_report(const ReportJobOptions& options, const ReportSteps& steps);
 // later run without --shard into the folder.
 batch::BatchResult merge_report_shards(const batch::MergeOptions& options);
 
-}  // namespace clutterscope::report
+}  // namespace clutterscope::jobs

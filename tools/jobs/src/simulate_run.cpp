@@ -7,11 +7,11 @@
 #include <clutterscope/datasets/graph_inference.hpp>
 #include <clutterscope/datasets/random_streams.hpp>
 #include <clutterscope/datasets/sensor.hpp>
+#include <clutterscope/jobs/simulate_run.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/model_cache.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <clutterscope/report/svg.hpp>
-#include <clutterscope/simulation/simulate_run.hpp>
 #include <clutterscope/visibility/eq10.hpp>
 #include <clutterscope/visibility/image_visibility.hpp>
 #include <cmath>
@@ -23,7 +23,9 @@
 #include <string>
 #include <vector>
 
-namespace clutterscope::simulation {
+namespace clutterscope::jobs {
+
+using namespace simulation;  // the library this job runs (moved here, issue 26)
 
 namespace fs = std::filesystem;
 namespace svg = report::svg;
@@ -380,4 +382,4 @@ SimulateSummary run_simulation(
   return summary;
 }
 
-}  // namespace clutterscope::simulation
+}  // namespace clutterscope::jobs

@@ -40,7 +40,7 @@
 #include <string>
 #include <vector>
 
-namespace clutterscope::scene_estimation {
+namespace clutterscope::jobs {
 
 // The BOP 2019 test targets a dataset ships, used when --targets is not given.
 inline constexpr const char* kBop19TargetsFile = "test_targets_bop19.json";
@@ -112,4 +112,4 @@ batch::BatchResult run_evaluate_job(const EvaluateJobOptions& options);
 // that a front end running other work first (`report --results`) refuses bad input before.
 void check_evaluate_job(const EvaluateJobOptions& options);
 
-}  // namespace clutterscope::scene_estimation
+}  // namespace clutterscope::jobs

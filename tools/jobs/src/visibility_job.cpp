@@ -7,13 +7,13 @@
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/mesh.hpp>
+#include <clutterscope/jobs/visibility_job.hpp>
 #include <clutterscope/render/bop_renderer.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/visibility/overlay.hpp>
 #include <clutterscope/visibility/scene_gt_info.hpp>
-#include <clutterscope/visibility/visibility_job.hpp>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -25,7 +25,9 @@
 #include <string>
 #include <vector>
 
-namespace clutterscope::visibility {
+namespace clutterscope::jobs {
+
+using namespace visibility;  // the library this job runs (moved here, issue 26)
 
 namespace fs = std::filesystem;
 
@@ -542,4 +544,4 @@ batch::BatchResult run_visibility_job(const VisibilityJobOptions& options) {
   return result;
 }
 
-}  // namespace clutterscope::visibility
+}  // namespace clutterscope::jobs

@@ -11,7 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-namespace clutterscope::scene_estimation {
+namespace clutterscope::jobs {
 
 // --detections synthetic: the synthetic detector, built from the GT (100% recall), as without
 // --detections.
@@ -21,7 +21,7 @@ inline constexpr const char* kSyntheticDetections = "synthetic";
 struct EstimateJobOptions {
   batch::DatasetOptions dataset;
   // The estimator's options; keep_history is set from save_beliefs by the job.
-  EstimateOptions estimate;
+  scene_estimation::EstimateOptions estimate;
   // BOP 2D detections JSON: every image's detections come from it (an image without entries
   // has none). Empty or kSyntheticDetections: the synthetic detector on every image.
   std::string detections;
@@ -48,4 +48,4 @@ std::string synthetic_detections_note(const std::vector<datasets::ImageKey>& ima
 // Creates the render::WorkerRasterisationScope its workers need.
 batch::BatchResult run_estimate_job(const EstimateJobOptions& options);
 
-}  // namespace clutterscope::scene_estimation
+}  // namespace clutterscope::jobs

@@ -5,8 +5,8 @@
 // synthetic sensor, runs the scene estimator on it and lets the planner (unloading.hpp) pick;
 // picked objects leave the scene. Writes OUT/rounds.csv, OUT/summary.json and
 // OUT/rounds/round_NN.svg, or with compare_thresholds one such folder OUT/threshold_T per
-// threshold and OUT/compare.csv. Links scene_estimation (and through it render and visibility)
-// and the report's SVG writer.
+// threshold and OUT/compare.csv. The rounds are the simulation library's world and planner with
+// scene_estimation's estimator; the pictures are the report's SVG writer.
 
 #include <clutterscope/scene_estimation/scene_estimate.hpp>
 #include <clutterscope/simulation/unloading.hpp>
@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-namespace clutterscope::simulation {
+namespace clutterscope::jobs {
 
 // Everything the `simulate` command's flags set.
 struct SimulateOptions {
@@ -24,7 +24,7 @@ struct SimulateOptions {
   int image = 0;
   std::string out;                             // the output folder
   scene_estimation::EstimateOptions estimate;  // the estimator of every round (seed included)
-  UnloadingOptions unloading;
+  simulation::UnloadingOptions unloading;
   // One run per threshold (cm^2) into OUT/threshold_T/, instead of one at
   // unloading.variance_threshold_cm2 into OUT.
   std::vector<double> compare_thresholds;
@@ -35,7 +35,7 @@ struct SimulateOptions {
 // One run of the task at one variance threshold.
 struct SimulateRun {
   double threshold_cm2 = 0;
-  UnloadingResult result;
+  simulation::UnloadingResult result;
 };
 
 struct SimulateSummary {
@@ -57,4 +57,4 @@ SimulateSummary run_simulation(
     const std::function<void(const SimulateRun&, const std::vector<std::string>& labels)>& on_run =
         {});
 
-}  // namespace clutterscope::simulation
+}  // namespace clutterscope::jobs

@@ -8,10 +8,10 @@
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/files.hpp>
+#include <clutterscope/jobs/report_job.hpp>
 #include <clutterscope/notebooks_export/notebook.hpp>
 #include <clutterscope/report/beliefs.hpp>
 #include <clutterscope/report/evaluation.hpp>
-#include <clutterscope/report/report_job.hpp>
 #include <clutterscope/report/tables.hpp>
 #include <cmath>
 #include <iostream>
@@ -24,7 +24,9 @@
 #include <tuple>
 #include <utility>
 
-namespace clutterscope::report {
+namespace clutterscope::jobs {
+
+using namespace report;  // the library this job runs (moved here, issue 26)
 
 namespace fs = std::filesystem;
 
@@ -527,4 +529,4 @@ std::string notebook_kept_message(const ReportNotebook& notebook) {
          notebook.written.path.string();
 }
 
-}  // namespace clutterscope::report
+}  // namespace clutterscope::jobs

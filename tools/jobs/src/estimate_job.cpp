@@ -5,10 +5,10 @@
 #include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/estimator/confidence.hpp>
+#include <clutterscope/jobs/estimate_job.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/report/calibration.hpp>
-#include <clutterscope/scene_estimation/estimate_job.hpp>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -20,7 +20,9 @@
 #include <string>
 #include <vector>
 
-namespace clutterscope::scene_estimation {
+namespace clutterscope::jobs {
+
+using namespace scene_estimation;  // the library this job runs (moved here, issue 26)
 
 namespace fs = std::filesystem;
 
@@ -459,4 +461,4 @@ batch::BatchResult run_estimate_job(const EstimateJobOptions& options) {
   return result;
 }
 
-}  // namespace clutterscope::scene_estimation
+}  // namespace clutterscope::jobs

@@ -4,12 +4,12 @@
 
 #include <gtest/gtest.h>
 
-#include <clutterscope/report/report_job.hpp>
+#include <clutterscope/jobs/report_job.hpp>
 #include <fstream>
 
 #include "test_folders.hpp"
 
-namespace clutterscope::report {
+namespace clutterscope::jobs {
 namespace {
 
 namespace fs = std::filesystem;
@@ -97,4 +97,4 @@ TEST(ReportJob, AFolderOfAnotherJobIsRefusedOnceAStepStarted) {
 }
 
 }  // namespace
-}  // namespace clutterscope::report
+}  // namespace clutterscope::jobs

@@ -14,13 +14,13 @@
 #include <clutterscope/datasets/mesh.hpp>
 #include <clutterscope/estimator/bop_pose_errors.hpp>
 #include <clutterscope/estimator/bop_scores.hpp>
+#include <clutterscope/jobs/evaluate_job.hpp>
 #include <clutterscope/render/bop_renderer.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/report/by_visibility.hpp>
 #include <clutterscope/report/tables.hpp>
 #include <clutterscope/scene_estimation/bop_vsd.hpp>
-#include <clutterscope/scene_estimation/evaluate_job.hpp>
 #include <clutterscope/visibility/bop_visibility.hpp>
 #include <cmath>
 #include <cstdio>
@@ -35,7 +35,9 @@
 #include <utility>
 #include <vector>
 
-namespace clutterscope::scene_estimation {
+namespace clutterscope::jobs {
+
+using namespace scene_estimation;  // the library this job runs (moved here, issue 26)
 
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
@@ -1067,4 +1069,4 @@ batch::BatchResult run_evaluate_job(const EvaluateJobOptions& options) {
 
 void check_evaluate_job(const EvaluateJobOptions& options) { evaluate(options, true); }
 
-}  // namespace clutterscope::scene_estimation
+}  // namespace clutterscope::jobs

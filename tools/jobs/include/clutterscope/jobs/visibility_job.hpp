@@ -4,7 +4,7 @@
 // step) runs on the batch runner: Eq. 10 (rendered) or bop_toolkit-exact (bop19/bop18)
 // visibility of every GT instance of a BOP dataset, resumable, shardable, on --jobs workers.
 // Writes objects.csv, images.csv, summary.json and, on request, BOP scene_gt_info.json, masks
-// and overlay pictures. The batch runner has no GL, so visibility may link it.
+// and overlay pictures. The per-image computation is the visibility library's.
 
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/dataset_selection.hpp>
@@ -13,16 +13,16 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-namespace clutterscope::visibility {
+namespace clutterscope::jobs {
 
 // Everything the `visibility` command's flags set.
 struct VisibilityJobOptions {
   batch::DatasetOptions dataset;
-  VisibilityOptions visibility;       // --mode, --delta-mm, --pixel-center
-  bool write_bop_info = false;        // OUT/bop/SPLIT/SCENE/scene_gt_info.json
-  bool masks = false;                 // OUT/bop/SPLIT/SCENE/{mask,mask_visib}/IMID_GTID.png
-  bool overlays = false;              // OUT/overlays/SPLIT/SCENE/IMID.png
-  datasets::DepthCheckOptions depth;  // BOP modes: --depth-scale, --no-depth-check
+  visibility::VisibilityOptions visibility;  // --mode, --delta-mm, --pixel-center
+  bool write_bop_info = false;               // OUT/bop/SPLIT/SCENE/scene_gt_info.json
+  bool masks = false;                        // OUT/bop/SPLIT/SCENE/{mask,mask_visib}/IMID_GTID.png
+  bool overlays = false;                     // OUT/overlays/SPLIT/SCENE/IMID.png
+  datasets::DepthCheckOptions depth;         // BOP modes: --depth-scale, --no-depth-check
   // Checks the options a run cannot start without; `why` names the flag (e.g. "--delta-mm: ").
   bool IsValid(std::string* why) const;
 };
@@ -39,4 +39,4 @@ nlohmann::json visibility_job_fingerprint(const VisibilityJobOptions& options);
 // Creates the render::WorkerRasterisationScope its workers need.
 batch::BatchResult run_visibility_job(const VisibilityJobOptions& options);
 
-}  // namespace clutterscope::visibility
+}  // namespace clutterscope::jobs
