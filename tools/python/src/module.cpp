@@ -14,17 +14,17 @@
 #include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
+#include <clutterscope/jobs/estimate_job.hpp>
+#include <clutterscope/jobs/evaluate_job.hpp>
+#include <clutterscope/jobs/report_job.hpp>
+#include <clutterscope/jobs/visibility_job.hpp>
 #include <clutterscope/notebooks_export/notebook.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/model_cache.hpp>
 #include <clutterscope/render/renderer.hpp>
 #include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/report/report.hpp>
-#include <clutterscope/report/report_job.hpp>
 #include <clutterscope/report/tables.hpp>
-#include <clutterscope/scene_estimation/estimate_job.hpp>
-#include <clutterscope/scene_estimation/evaluate_job.hpp>
-#include <clutterscope/visibility/visibility_job.hpp>
 #include <cstring>
 #include <filesystem>
 #include <functional>
@@ -52,8 +52,11 @@ py::object to_python(const nlohmann::ordered_json& json) {
 // the same struct, the same checks and messages).
 class Dataset {
  public:
+  // Refuses a selection of ids that do not exist at once, with the jobs' message.
   explicit Dataset(batch::DatasetOptions options)
-      : options_(std::move(options)), dataset_(batch::open_dataset(options_)) {}
+      : options_(std::move(options)),
+        dataset_(batch::open_dataset(options_)),
+        images_(batch::list_selected_images(dataset_, options_)) {}
 
   const batch::DatasetOptions& options() const { return options_; }
   const datasets::BopDataset& dataset() const { return dataset_; }
@@ -63,7 +66,7 @@ class Dataset {
   // (scene_id, im_id) of the selected images, in job order.
   std::vector<std::pair<int, int>> images() const {
     std::vector<std::pair<int, int>> keys;
-    for (const datasets::ImageKey& key : batch::list_selected_images(dataset_, options_)) {
+    for (const datasets::ImageKey& key : images_) {
       keys.emplace_back(key.scene_id, key.im_id);
     }
     return keys;
@@ -76,6 +79,7 @@ class Dataset {
  private:
   batch::DatasetOptions options_;
   datasets::BopDataset dataset_;
+  std::vector<datasets::ImageKey> images_;
 };
 
 py::array_t<double> matrix(const Eigen::MatrixXd& m) {
@@ -280,8 +284,8 @@ void check(const Options& options) {
   if (!options.IsValid(&why)) throw batch::UsageError(why);
 }
 
-visibility::VisibilityJobOptions visibility_options(const Dataset& dataset, const py::dict& kw) {
-  visibility::VisibilityJobOptions options;
+jobs::VisibilityJobOptions visibility_options(const Dataset& dataset, const py::dict& kw) {
+  jobs::VisibilityJobOptions options;
   options.dataset = run_options(dataset, kw["out"].cast<std::string>(), kw["jobs"].cast<int>(),
                                 kw["keep_going"].cast<bool>());
   const std::string mode = kw["mode"].cast<std::string>();
@@ -302,8 +306,8 @@ visibility::VisibilityJobOptions visibility_options(const Dataset& dataset, cons
   return options;
 }
 
-scene_estimation::EstimateJobOptions estimate_options(const Dataset& dataset, const py::dict& kw) {
-  scene_estimation::EstimateJobOptions options;
+jobs::EstimateJobOptions estimate_options(const Dataset& dataset, const py::dict& kw) {
+  jobs::EstimateJobOptions options;
   options.dataset = run_options(dataset, kw["out"].cast<std::string>(), kw["jobs"].cast<int>(),
                                 kw["keep_going"].cast<bool>());
   scene_estimation::EstimateOptions& e = options.estimate;
@@ -329,8 +333,8 @@ scene_estimation::EstimateJobOptions estimate_options(const Dataset& dataset, co
   return options;
 }
 
-scene_estimation::EvaluateJobOptions evaluate_options(const Dataset& dataset, const py::dict& kw) {
-  scene_estimation::EvaluateJobOptions options;
+jobs::EvaluateJobOptions evaluate_options(const Dataset& dataset, const py::dict& kw) {
+  jobs::EvaluateJobOptions options;
   options.dataset = run_options(dataset, kw["out"].cast<std::string>(), kw["jobs"].cast<int>(),
                                 kw["keep_going"].cast<bool>());
   options.results = kw["results"].cast<std::vector<std::string>>();
@@ -346,37 +350,37 @@ scene_estimation::EvaluateJobOptions evaluate_options(const Dataset& dataset, co
 }
 
 py::dict run_visibility(const Dataset& dataset, const py::dict& kw) {
-  const visibility::VisibilityJobOptions options = visibility_options(dataset, kw);
+  const jobs::VisibilityJobOptions options = visibility_options(dataset, kw);
   Monitor monitor(kw["progress"]);
-  const batch::BatchResult result = monitor.run<batch::BatchResult>(
-      [&options] { return visibility::run_visibility_job(options); });
+  const batch::BatchResult result =
+      monitor.run<batch::BatchResult>([&options] { return jobs::run_visibility_job(options); });
   return result_dict(result, options.dataset.out);
 }
 
 py::dict run_estimate(const Dataset& dataset, const py::dict& kw) {
-  const scene_estimation::EstimateJobOptions options = estimate_options(dataset, kw);
+  const jobs::EstimateJobOptions options = estimate_options(dataset, kw);
   Monitor monitor(kw["progress"]);
-  const batch::BatchResult result = monitor.run<batch::BatchResult>(
-      [&options] { return scene_estimation::run_estimate_job(options); });
+  const batch::BatchResult result =
+      monitor.run<batch::BatchResult>([&options] { return jobs::run_estimate_job(options); });
   return result_dict(result, options.dataset.out);
 }
 
 py::dict run_evaluate(const Dataset& dataset, const py::dict& kw) {
-  const scene_estimation::EvaluateJobOptions options = evaluate_options(dataset, kw);
+  const jobs::EvaluateJobOptions options = evaluate_options(dataset, kw);
   Monitor monitor(kw["progress"]);
-  const batch::BatchResult result = monitor.run<batch::BatchResult>(
-      [&options] { return scene_estimation::run_evaluate_job(options); });
+  const batch::BatchResult result =
+      monitor.run<batch::BatchResult>([&options] { return jobs::run_evaluate_job(options); });
   return result_dict(result, options.dataset.out);
 }
 
-// --name value as `report` forwards an option to its steps (report::GivenOptions).
-void give(report::GivenOptions* given, const std::string& name, const py::handle& value) {
+// --name value as `report` forwards an option to its steps (jobs::GivenOptions).
+void give(jobs::GivenOptions* given, const std::string& name, const py::handle& value) {
   if (value.is_none()) return;
   (*given)[name] = py::str(value).cast<std::string>();
 }
 
 py::dict run_report(const Dataset& dataset, const py::dict& kw) {
-  report::ReportJobOptions options;
+  jobs::ReportJobOptions options;
   options.dataset = run_options(dataset, kw["out"].cast<std::string>(), kw["jobs"].cast<int>(),
                                 kw["keep_going"].cast<bool>());
   report::ReportOptions& analysis = options.analysis;
@@ -396,10 +400,10 @@ py::dict run_report(const Dataset& dataset, const py::dict& kw) {
   visibility_kw["masks"] = false;
   visibility_kw["overlays"] = false;
   visibility_kw["delta_mm"] = kw["delta_mm"];
-  visibility::VisibilityJobOptions visibility = visibility_options(dataset, visibility_kw);
+  jobs::VisibilityJobOptions visibility = visibility_options(dataset, visibility_kw);
   py::dict estimate_kw = kw.attr("copy")();
   estimate_kw["beliefs"] = false;
-  scene_estimation::EstimateJobOptions estimate = estimate_options(dataset, estimate_kw);
+  jobs::EstimateJobOptions estimate = estimate_options(dataset, estimate_kw);
   give(&options.visibility_given, "--mode", kw["mode"]);
   give(&options.visibility_given, "--delta-mm", kw["delta_mm"]);
   give(&options.visibility_given, "--pixel-center", kw["pixel_center"]);
@@ -412,38 +416,37 @@ py::dict run_report(const Dataset& dataset, const py::dict& kw) {
   if (!kw["time"].cast<bool>()) options.estimate_given["--no-time"] = "";
 
   datasets::BopDataset opened = batch::open_dataset(options.dataset);
-  if (!estimate.detections.empty() &&
-      estimate.detections != scene_estimation::kSyntheticDetections) {
+  if (!estimate.detections.empty() && estimate.detections != jobs::kSyntheticDetections) {
     opened.attach_detections(estimate.detections);
   }
   batch::list_selected_images(opened, options.dataset);
 
-  report::ReportSteps steps;
+  jobs::ReportSteps steps;
   steps.renderer = render::renderer_in_use;
-  steps.visibility_options = visibility::visibility_job_fingerprint(visibility);
-  steps.estimate_options = scene_estimation::estimate_job_fingerprint(estimate, opened);
+  steps.visibility_options = jobs::visibility_job_fingerprint(visibility);
+  steps.estimate_options = jobs::estimate_job_fingerprint(estimate, opened);
   steps.visibility = [&visibility](const fs::path& out) {
-    visibility::VisibilityJobOptions job = visibility;
+    jobs::VisibilityJobOptions job = visibility;
     job.dataset.out = out.string();
-    return visibility::run_visibility_job(job);
+    return jobs::run_visibility_job(job);
   };
   steps.estimate = [&estimate](const fs::path& out) {
-    scene_estimation::EstimateJobOptions job = estimate;
+    jobs::EstimateJobOptions job = estimate;
     job.dataset.out = out.string();
-    return scene_estimation::run_estimate_job(job);
+    return jobs::run_estimate_job(job);
   };
   steps.beliefs = [&estimate](const datasets::ImageKey& image, const fs::path& out) {
-    scene_estimation::EstimateJobOptions job = estimate;
+    jobs::EstimateJobOptions job = estimate;
     job.dataset.out = out.string();
     job.dataset.scenes = std::to_string(image.scene_id);
     job.dataset.images = std::to_string(image.im_id);
     job.dataset.jobs = 1;
     job.save_beliefs = true;
-    return scene_estimation::run_estimate_job(job);
+    return jobs::run_estimate_job(job);
   };
   Monitor monitor(kw["progress"]);
-  const report::ReportRun run =
-      monitor.run<report::ReportRun>([&] { return report::run_report(options, steps); });
+  const jobs::ReportRun run =
+      monitor.run<jobs::ReportRun>([&] { return jobs::run_report(options, steps); });
   py::dict result;
   result["out"] = options.dataset.out;
   result["exit_code"] = run.exit_code;
@@ -491,7 +494,7 @@ std::string write_notebook(const std::string& dir, double variance_threshold_cm2
   options.evaluation = evaluation;
   options.generator = std::string("clutterscope ") + CLUTTERSCOPE_VERSION;
   check(options);
-  return report::write_report_notebook(dir, options).written.path.string();
+  return jobs::write_report_notebook(dir, options).written.path.string();
 }
 
 }  // namespace
