@@ -313,8 +313,11 @@ def test_write_notebook_writes_the_cli_notebook(report_dirs, tmp_path):
     copy = tmp_path / "copy"
     shutil.copytree(cli, copy)
     (copy / "clutter_report.ipynb").unlink()
-    written = clutterscope.write_notebook(copy)
-    assert written.read_bytes() == (cli / "clutter_report.ipynb").read_bytes()
+    written = clutterscope.write_notebook(copy, variance_threshold_cm2=1.0)
+    shutil.copytree(cli, tmp_path / "by_cli")
+    (tmp_path / "by_cli/clutter_report.ipynb").unlink()
+    cli_ok("notebook", tmp_path / "by_cli", "--variance-threshold-cm2", "1")
+    assert written.read_bytes() == (tmp_path / "by_cli/clutter_report.ipynb").read_bytes()
 
 
 # Help, stubs, installation and the README example.
@@ -365,10 +368,10 @@ def test_module_imports_from_the_build_tree_and_an_install_prefix(tmp_path):
 
 
 def test_readme_example_runs_as_written(tmp_path):
-    """tools/python/example.py is the README's Python example, quoted verbatim there; it runs
-    from the repository root (here a folder whose datasets/ is the repository's, so that its
-    report folder lands in the test's scratch)."""
-    example = SOURCE / "tools/python/example.py"
+    """tools/python/examples/readme.py is the README's Python example, quoted verbatim there; it
+    runs from the repository root (here a folder whose datasets/ is the repository's, so that
+    its report folder lands in the test's scratch)."""
+    example = SOURCE / "tools/python/examples/readme.py"
     code = example.read_text()
     assert len([line for line in code.splitlines() if line.strip()]) <= 10
     (tmp_path / "datasets").symlink_to(SOURCE / "datasets")
@@ -377,4 +380,4 @@ def test_readme_example_runs_as_written(tmp_path):
     assert completed.returncode == 0, completed.stderr
     assert "recommended_threshold_cm2" in completed.stdout, completed.stdout
     readme = (SOURCE / "README.md").read_text()
-    assert code.strip() in readme, "README.md does not quote tools/python/example.py verbatim"
+    assert code.strip() in readme, "README.md does not quote tools/python/examples/readme.py"

@@ -334,7 +334,7 @@ def estimate(ds, *, scenes=None, images=None, jobs=None, particles=100, iteratio
              gibbs_sweeps=5, icp_samples=20, variance_threshold_cm2=0.25,
              confidence_radius_cm=None, seed=1, observation="measured", detections=None,
              beliefs=False, time=True, out=None, keep_going=False, progress=None):
-    """NBP scene estimation of every image (`clutterscope estimate`), as a DataFrame of estimates.csv.
+    """NBP scene estimation of every image (`clutterscope estimate`): estimates.csv as a DataFrame.
 
     Args:
         ds: a Dataset (its selection, unless scenes / images are given).
