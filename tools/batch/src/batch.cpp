@@ -74,6 +74,19 @@ struct WorkQueue {
   std::exception_ptr first_error;
   double item_seconds = 0.0;         // summed over items, for the mean time per image
   FileDigestCache* files = nullptr;  // when the job has an input digest
+  std::mutex progress_mutex;         // one BatchOptions::on_progress call at a time
+  std::size_t done = 0;              // items of the scope done (resumed ones included)
+  std::size_t scope = 0;             // items of the run's scope
+
+  bool cancelled(const BatchOptions& options) const {
+    return options.cancel != nullptr && options.cancel->load();
+  }
+
+  void report_progress(const BatchOptions& options) {
+    if (!options.on_progress) return;
+    std::lock_guard<std::mutex> lock(progress_mutex);
+    options.on_progress(++done, scope);
+  }
 
   void add_item_seconds(double seconds) {
     std::lock_guard<std::mutex> lock(mutex);
@@ -96,7 +109,7 @@ void run_worker(const BatchJob& job, const BatchOptions& options, WorkQueue& que
     queue.abort(std::current_exception());
     return;
   }
-  while (!queue.stop) {
+  while (!queue.stop && !queue.cancelled(options)) {
     const std::size_t slot = queue.next++;
     if (slot >= queue.todo.size()) break;
     const ImageKey& key = job.items[queue.todo[slot]];
@@ -126,6 +139,7 @@ void run_worker(const BatchJob& job, const BatchOptions& options, WorkQueue& que
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
       }
       progress.item_done(!failure);
+      queue.report_progress(options);
     } catch (...) {
       queue.abort(std::current_exception());
       break;
@@ -256,6 +270,8 @@ BatchResult run_batch(const BatchJob& job, const BatchOptions& options) {
                  job.output->command.c_str(), result.changed, describe(*first_changed).c_str());
   }
 
+  queue.scope = in_scope;
+  queue.done = result.resumed;
   Progress::Style style = options.quiet ? Progress::Style::kQuiet : Progress::Style::kAuto;
   Progress progress(options.progress_label.empty() ? job.output->command : options.progress_label,
                     in_scope, result.resumed, style);
@@ -277,11 +293,21 @@ BatchResult run_batch(const BatchJob& job, const BatchOptions& options) {
     progress.finish(result.failed);
     std::rethrow_exception(queue.first_error);
   }
+  const std::size_t done_now = result.computed + result.failed;
+  if (done_now < queue.todo.size()) {
+    // Only a cancel leaves items untaken without an error. No run.json: the run is not over.
+    progress.finish(result.failed);
+    throw Cancelled(job.output->command + ": cancelled after " +
+                    std::to_string(result.resumed + done_now) + " of " + std::to_string(in_scope) +
+                    " images; the same job run again into " + options.out_dir.string() +
+                    " resumes them");
+  }
   if (options.shard) folder.write_shard_manifest(*options.shard, in_scope, result.failed);
 
   // A shard run finalizes too when every item of the job is now done (shards sharing OUT).
   if (!options.shard || folder.missing_items({options.out_dir}).count == 0) {
-    const BatchTotals totals = folder.finalize(*job.output, {options.out_dir});
+    const BatchTotals totals =
+        folder.finalize(*job.output, {options.out_dir}, options.keep_results ? &result : nullptr);
     result.complete = true;
     result.failed = totals.failures.size();
   }

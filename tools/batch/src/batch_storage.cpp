@@ -262,10 +262,14 @@ MissingItems BatchFolder::missing_items(const std::vector<fs::path>& roots) cons
   return missing;
 }
 
-BatchTotals BatchFolder::finalize(const BatchOutputSpec& spec,
-                                  const std::vector<fs::path>& roots) const {
+BatchTotals BatchFolder::finalize(const BatchOutputSpec& spec, const std::vector<fs::path>& roots,
+                                  BatchResult* kept) const {
   std::unique_ptr<SummaryBuilder> builder = spec.make_summary(fingerprint_.at("options"), root_);
   TableWriter tables(root_, spec.tables);
+  if (kept) {
+    kept->tables.clear();
+    for (const TableSpec& table : spec.tables) kept->tables.push_back(table.header + '\n');
+  }
   BatchTotals totals;
   const nlohmann::json no_summary = nlohmann::json::object();
   const std::string no_error;
@@ -291,6 +295,7 @@ BatchTotals BatchFolder::finalize(const BatchOutputSpec& spec,
         const auto& rows = part.at("tables");
         for (std::size_t t = 0; t < rows.size() && t < spec.tables.size(); ++t) {
           tables.append(t, rows[t].get_ref<const std::string&>());
+          if (kept) kept->tables[t] += rows[t].get_ref<const std::string&>();
         }
         if (copy) {
           for (const auto& file : part.at("files")) {
@@ -306,7 +311,9 @@ BatchTotals BatchFolder::finalize(const BatchOutputSpec& spec,
     throw datasets::DatasetError(items_path(root_), "no result for " + key_name(key));
   });
   tables.commit();
-  write_json_atomically(root_ / "summary.json", builder->finish(totals));
+  nlohmann::json summary = builder->finish(totals);
+  write_json_atomically(root_ / "summary.json", summary);
+  if (kept) kept->summary = std::move(summary);
   return totals;
 }
 

@@ -1,21 +1,17 @@
 // `clutterscope report`: flags -> jobs::ReportJobOptions and the visibility and estimate
-// jobs' Options -> jobs::run_report (jobs/report_job.hpp), which calls the jobs bound here.
+// jobs' Options -> jobs::bind_report_steps and jobs::run_report (jobs/report_job.hpp).
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <clutterscope/batch/formats.hpp>
-#include <clutterscope/batch/input_digest.hpp>
 #include <clutterscope/cli/dataset_options.hpp>
-#include <clutterscope/datasets/files.hpp>
 #include <clutterscope/jobs/evaluate_job.hpp>
 #include <clutterscope/jobs/report_job.hpp>
-#include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/report/evaluation.hpp>
 #include <filesystem>
 #include <iostream>
 #include <map>
 #include <memory>
-#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -180,115 +176,21 @@ void parse_step_flags(const std::vector<std::string>& command_line,
   app.parse(reversed);
 }
 
-// The jobs' options from the report's flags, checked before either step starts, and the steps
-// bound to them.
-class BoundSteps {
- public:
-  // Parses and validates both steps' options and reads the dataset selection (its scenes,
-  // images, targets and detections), throwing before anything is written.
-  explicit BoundSteps(const jobs::ReportJobOptions& options) {
-    parse_step_flags(step_command_line(options, "estimate"), &add_estimate_options, &estimate_);
-    VisibilityFlags visibility;
-    parse_step_flags(step_command_line(options, "visibility"), &add_visibility_options,
-                     &visibility);
-    visibility_ = visibility.options();
-    // Both steps' bounds (the estimator's memory bounds among them) before the report folder
-    // is marked.
-    std::string why;
-    if (!visibility_.IsValid(&why) || !estimate_.IsValid(&why)) throw batch::UsageError(why);
-    datasets::BopDataset dataset = batch::open_dataset(options.dataset);
-    if (!estimate_.detections.empty() && estimate_.detections != jobs::kSyntheticDetections) {
-      dataset.attach_detections(estimate_.detections);
-    }
-    batch::list_selected_images(dataset, options.dataset);
-    visibility_fingerprint_ = jobs::visibility_job_fingerprint(visibility_);
-    estimate_fingerprint_ = jobs::estimate_job_fingerprint(estimate_, dataset);
-    if (!options.results.empty()) bind_evaluate(options);
+// The steps' options from the report's flags, each parsed by the step's own option definitions
+// (a bad value is the error `clutterscope STEP` gives); jobs::bind_report_steps checks them.
+jobs::ReportStepOptions parse_step_options(const jobs::ReportJobOptions& options) {
+  jobs::ReportStepOptions steps;
+  parse_step_flags(step_command_line(options, "estimate"), &add_estimate_options, &steps.estimate);
+  VisibilityFlags visibility;
+  parse_step_flags(step_command_line(options, "visibility"), &add_visibility_options, &visibility);
+  steps.visibility = visibility.options();
+  if (!options.results.empty()) {
+    EvaluateFlags evaluate;
+    parse_step_flags(step_command_line(options, "evaluate"), &add_evaluate_options, &evaluate);
+    steps.evaluate = evaluate.options();
   }
-
-  jobs::ReportSteps steps() const {
-    jobs::ReportSteps steps;
-    steps.renderer = render::renderer_in_use;
-    steps.visibility_options = visibility_fingerprint_;
-    steps.estimate_options = estimate_fingerprint_;
-    if (evaluate_) {
-      steps.evaluate_options = evaluate_fingerprint_;
-      steps.evaluate = [this](const std::filesystem::path& out,
-                              const std::filesystem::path& bundled_results,
-                              const std::filesystem::path& images_csv) {
-        jobs::EvaluateJobOptions job = *evaluate_;
-        job.dataset.out = out.string();
-        job.results.push_back(bundled_results.string());
-        job.scene_visibility_images = images_csv.string();
-        return jobs::run_evaluate_job(job);
-      };
-    }
-    steps.visibility = [this](const std::filesystem::path& out) {
-      jobs::VisibilityJobOptions job = visibility_;
-      job.dataset.out = out.string();
-      return jobs::run_visibility_job(job);
-    };
-    steps.estimate = [this](const std::filesystem::path& out) {
-      jobs::EstimateJobOptions job = estimate_;
-      job.dataset.out = out.string();
-      return jobs::run_estimate_job(job);
-    };
-    // The estimate step's options on one image, alone on one worker, quietly.
-    steps.beliefs = [this](const datasets::ImageKey& image, const std::filesystem::path& out) {
-      jobs::EstimateJobOptions job = estimate_;
-      job.dataset.out = out.string();
-      job.dataset.scenes = std::to_string(image.scene_id);
-      job.dataset.images = std::to_string(image.im_id);
-      job.dataset.jobs = 1;
-      job.dataset.quiet = true;
-      job.save_beliefs = true;
-      return jobs::run_estimate_job(job);
-    };
-    return steps;
-  }
-
- private:
-  // The evaluate step: its options parsed as `evaluate` parses them and every check evaluate
-  // makes before it computes (the results files line by line among them), so that bad input
-  // is refused before any step runs.
-  void bind_evaluate(const jobs::ReportJobOptions& options) {
-    EvaluateFlags flags;
-    parse_step_flags(step_command_line(options, "evaluate"), &add_evaluate_options, &flags);
-    jobs::EvaluateJobOptions evaluate = flags.options();
-    std::string why;
-    if (!evaluate.IsValid(&why)) throw batch::UsageError(why);
-    nlohmann::json results = nlohmann::json::array();
-    for (const std::string& file : evaluate.results) {
-      const std::string name = std::filesystem::path(file).stem().string();
-      if (name == report::kBundledMethod) {
-        throw batch::UsageError("--results " + file + ": " + report::kBundledMethod +
-                                " is the name of the bundled estimator's results in the report; "
-                                "give the file another name");
-      }
-      results.push_back({{"name", name},
-                         {"xxh64", batch::format_hex64(batch::xxh64(datasets::read_file(file)))}});
-    }
-    jobs::check_evaluate_job(evaluate);
-    std::vector<std::string> errors = evaluate.errors;
-    std::sort(errors.begin(), errors.end());
-    const report::ByVisibilityOptions& by_visibility = evaluate.by_visibility;
-    evaluate_fingerprint_ = {
-        {"results", results},
-        {"errors", errors},
-        {"vsd_delta_mm",
-         evaluate.vsd_delta_mm ? nlohmann::json(*evaluate.vsd_delta_mm) : nlohmann::json()},
-        {"band_edges", by_visibility.band_edges},
-        {"correct_metric", report::to_string(by_visibility.correct_metric)},
-        {"correct_threshold", by_visibility.correct_threshold},
-        {"min_precision", by_visibility.min_precision}};
-    evaluate_ = std::move(evaluate);
-  }
-
-  jobs::EstimateJobOptions estimate_;
-  jobs::VisibilityJobOptions visibility_;
-  std::optional<jobs::EvaluateJobOptions> evaluate_;
-  nlohmann::json visibility_fingerprint_, estimate_fingerprint_, evaluate_fingerprint_;
-};
+  return steps;
+}
 
 struct ReportCommandState {
   jobs::ReportJobOptions options;
@@ -319,9 +221,9 @@ void run_report_command(CLI::App& command, ReportCommandState& state, int* exit_
   std::string why;
   if (!options.IsValid(&why)) throw batch::UsageError(why);
   // Every option of both steps is checked before either step starts work.
-  const BoundSteps steps(options);
+  const jobs::ReportSteps steps = jobs::bind_report_steps(options, parse_step_options(options));
   // Each step's runner reports its computed and reused images on stderr (and in run.json).
-  const jobs::ReportRun run = jobs::run_report(options, steps.steps());
+  const jobs::ReportRun run = jobs::run_report(options, steps);
   if (run.shard_only) {
     std::cerr << run.console_summary;
   } else {

@@ -432,7 +432,7 @@ nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
   return fingerprint;
 }
 
-batch::BatchResult run_estimate_job(const EstimateJobOptions& options) {
+JobSummary run_estimate(const EstimateJobOptions& options, const RunControl& control) {
   EstimateJobOptions job_options = options;
   job_options.estimate.keep_history = options.save_beliefs;  // before the memory bounds
   std::string why;
@@ -452,13 +452,19 @@ batch::BatchResult run_estimate_job(const EstimateJobOptions& options) {
   };
   // Set before the workers create their GL contexts (see render/context.hpp).
   const render::WorkerRasterisationScope rasterisation;
-  const batch::BatchResult result =
-      batch::run_batch(job, batch::batch_options_of(job_options.dataset, "estimate"));
+  batch::BatchResult result = batch::run_batch(
+      job, control.apply(batch::batch_options_of(job_options.dataset, "estimate"), "estimate"));
   batch::record_renderer(job_options.dataset.out, render::renderer_in_use());
   if (job_options.detections.empty() && !job_options.dataset.quiet) {
     std::fprintf(stderr, "%s\n", synthetic_detections_note(job.items).c_str());
   }
-  return result;
+  return job_summary(output, job_options.dataset.out, std::move(result));
+}
+
+batch::BatchResult run_estimate_job(const EstimateJobOptions& options) {
+  RunControl control;
+  control.keep_results = false;
+  return run_estimate(options, control).run;
 }
 
 }  // namespace clutterscope::jobs

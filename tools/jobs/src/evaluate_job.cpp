@@ -954,7 +954,8 @@ batch::BatchOutputSpec evaluate_output_spec() {
 namespace {
 
 // run_evaluate_job, or with check_only its checks alone (nothing written, nothing said).
-batch::BatchResult evaluate(const EvaluateJobOptions& options, bool check_only) {
+batch::BatchResult evaluate(const EvaluateJobOptions& options, bool check_only,
+                            const RunControl& control) {
   std::string why;
   if (!options.IsValid(&why)) throw batch::UsageError(why);
   EvaluateJobOptions job_options = options;
@@ -1052,21 +1053,29 @@ batch::BatchResult evaluate(const EvaluateJobOptions& options, bool check_only) 
                                                    vsd_options);
     return [worker](const datasets::ImageKey& key) { return worker->run(key); };
   };
-  if (!vsd) return batch::run_batch(job, batch::batch_options_of(dataset_options, "evaluate"));
+  const batch::BatchOptions batch_options =
+      control.apply(batch::batch_options_of(dataset_options, "evaluate"), "evaluate");
+  if (!vsd) return batch::run_batch(job, batch_options);
   // Set before the workers create their GL contexts (see render/context.hpp).
   const render::WorkerRasterisationScope rasterisation;
-  const batch::BatchResult result =
-      batch::run_batch(job, batch::batch_options_of(dataset_options, "evaluate"));
+  batch::BatchResult result = batch::run_batch(job, batch_options);
   batch::record_renderer(dataset_options.out, render::renderer_in_use());
   return result;
 }
 
 }  // namespace
 
-batch::BatchResult run_evaluate_job(const EvaluateJobOptions& options) {
-  return evaluate(options, false);
+JobSummary run_evaluate(const EvaluateJobOptions& options, const RunControl& control) {
+  return job_summary(evaluate_output_spec(), options.dataset.out,
+                     evaluate(options, false, control));
 }
 
-void check_evaluate_job(const EvaluateJobOptions& options) { evaluate(options, true); }
+batch::BatchResult run_evaluate_job(const EvaluateJobOptions& options) {
+  RunControl control;
+  control.keep_results = false;
+  return run_evaluate(options, control).run;
+}
+
+void check_evaluate_job(const EvaluateJobOptions& options) { evaluate(options, true, {}); }
 
 }  // namespace clutterscope::jobs

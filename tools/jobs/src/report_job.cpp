@@ -10,11 +10,13 @@
 #include <clutterscope/datasets/files.hpp>
 #include <clutterscope/jobs/report_job.hpp>
 #include <clutterscope/notebooks_export/notebook.hpp>
+#include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/report/beliefs.hpp>
 #include <clutterscope/report/evaluation.hpp>
 #include <clutterscope/report/tables.hpp>
 #include <cmath>
 #include <iostream>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -527,6 +529,119 @@ std::string notebook_kept_message(const ReportNotebook& notebook) {
          " changed since clutterscope wrote it (edits or outputs); it is kept, and the new "
          "notebook is " +
          notebook.written.path.string();
+}
+
+namespace {
+
+// The evaluate step's identity before it runs (recorded in DIR/.report/job.json): the results
+// files' names and digests and the evaluation options. Refuses a results file named like the
+// bundled estimator's.
+nlohmann::json evaluate_step_fingerprint(const EvaluateJobOptions& evaluate) {
+  nlohmann::json results = nlohmann::json::array();
+  for (const std::string& file : evaluate.results) {
+    const std::string name = fs::path(file).stem().string();
+    if (name == kBundledMethod) {
+      throw batch::UsageError("--results " + file + ": " + kBundledMethod +
+                              " is the name of the bundled estimator's results in the report; "
+                              "give the file another name");
+    }
+    results.push_back(
+        {{"name", name}, {"xxh64", batch::format_hex64(batch::xxh64(datasets::read_file(file)))}});
+  }
+  check_evaluate_job(evaluate);
+  std::vector<std::string> errors = evaluate.errors;
+  std::sort(errors.begin(), errors.end());
+  const ByVisibilityOptions& by_visibility = evaluate.by_visibility;
+  return {{"results", results},
+          {"errors", errors},
+          {"vsd_delta_mm",
+           evaluate.vsd_delta_mm ? nlohmann::json(*evaluate.vsd_delta_mm) : nlohmann::json()},
+          {"band_edges", by_visibility.band_edges},
+          {"correct_metric", to_string(by_visibility.correct_metric)},
+          {"correct_threshold", by_visibility.correct_threshold},
+          {"min_precision", by_visibility.min_precision}};
+}
+
+}  // namespace
+
+ReportSteps bind_report_steps(const ReportJobOptions& options, const ReportStepOptions& given,
+                              const RunControl& control) {
+  // What the report owns, whatever the steps' options held.
+  auto steps = std::make_shared<ReportStepOptions>(given);
+  const auto step_dataset = [&options](const char* step) {
+    batch::DatasetOptions dataset = options.dataset;
+    dataset.out = (fs::path(options.dataset.out) / step).string();
+    return dataset;
+  };
+  steps->visibility.dataset = step_dataset(kVisibilityStep);
+  steps->estimate.dataset = step_dataset(kEstimateStep);
+  steps->estimate.estimate.variance_threshold_cm2 = options.analysis.variance_threshold_cm2;
+  steps->estimate.estimate.confidence_radius_cm = options.analysis.confidence_radius_cm;
+  steps->estimate.estimate.seed = options.analysis.seed;
+  steps->evaluate.dataset = step_dataset(kEvaluateStep);
+  steps->evaluate.results = options.results;
+  steps->evaluate.by_visibility.seed = options.analysis.seed;
+
+  // Both steps' bounds (the estimator's memory bounds among them) before the report folder is
+  // marked.
+  std::string why;
+  if (!steps->visibility.IsValid(&why) || !steps->estimate.IsValid(&why)) {
+    throw batch::UsageError(why);
+  }
+  datasets::BopDataset dataset = batch::open_dataset(options.dataset);
+  const std::string& detections = steps->estimate.detections;
+  if (!detections.empty() && detections != kSyntheticDetections) {
+    dataset.attach_detections(detections);
+  }
+  batch::list_selected_images(dataset, options.dataset);
+
+  ReportSteps bound;
+  bound.renderer = render::renderer_in_use;
+  bound.visibility_options = visibility_job_fingerprint(steps->visibility);
+  bound.estimate_options = estimate_job_fingerprint(steps->estimate, dataset);
+  // Results stay files: the report reads its steps' tables.
+  RunControl step_control = control;
+  step_control.keep_results = false;
+  if (!options.results.empty()) {
+    if (!steps->evaluate.IsValid(&why)) throw batch::UsageError(why);
+    bound.evaluate_options = evaluate_step_fingerprint(steps->evaluate);
+    bound.evaluate = [steps, step_control](const fs::path& out, const fs::path& bundled_results,
+                                           const fs::path& images_csv) {
+      EvaluateJobOptions job = steps->evaluate;
+      job.dataset.out = out.string();
+      job.results.push_back(bundled_results.string());
+      job.scene_visibility_images = images_csv.string();
+      return run_evaluate(job, step_control).run;
+    };
+  }
+  bound.visibility = [steps, step_control](const fs::path& out) {
+    VisibilityJobOptions job = steps->visibility;
+    job.dataset.out = out.string();
+    return run_visibility(job, step_control).run;
+  };
+  bound.estimate = [steps, step_control](const fs::path& out) {
+    EstimateJobOptions job = steps->estimate;
+    job.dataset.out = out.string();
+    return run_estimate(job, step_control).run;
+  };
+  // The estimate step's options on one image, alone on one worker, quietly.
+  bound.beliefs = [steps, step_control](const datasets::ImageKey& image, const fs::path& out) {
+    EstimateJobOptions job = steps->estimate;
+    job.dataset.out = out.string();
+    job.dataset.scenes = std::to_string(image.scene_id);
+    job.dataset.images = std::to_string(image.im_id);
+    job.dataset.jobs = 1;
+    job.dataset.quiet = true;
+    job.save_beliefs = true;
+    RunControl beliefs_control = step_control;
+    if (step_control.progress) {
+      beliefs_control.progress = [progress = step_control.progress](const Progress& done) {
+        progress(Progress{"beliefs", done.done, done.total});
+      };
+    }
+    return run_estimate(job, beliefs_control).run;
+  };
+  return bound;
 }
 
 }  // namespace clutterscope::jobs

@@ -521,7 +521,7 @@ nlohmann::json visibility_job_fingerprint(const VisibilityJobOptions& options) {
   return fingerprint;
 }
 
-batch::BatchResult run_visibility_job(const VisibilityJobOptions& options) {
+JobSummary run_visibility(const VisibilityJobOptions& options, const RunControl& control) {
   std::string why;
   if (!options.IsValid(&why)) throw batch::UsageError(why);
   const datasets::BopDataset dataset = batch::open_dataset(options.dataset);
@@ -538,10 +538,16 @@ batch::BatchResult run_visibility_job(const VisibilityJobOptions& options) {
   };
   // Set before the workers create their GL contexts (see render/context.hpp).
   const render::WorkerRasterisationScope rasterisation;
-  const batch::BatchResult result =
-      batch::run_batch(job, batch::batch_options_of(options.dataset, "visibility"));
+  batch::BatchResult result = batch::run_batch(
+      job, control.apply(batch::batch_options_of(options.dataset, "visibility"), "visibility"));
   batch::record_renderer(options.dataset.out, render::renderer_in_use());
-  return result;
+  return job_summary(output, options.dataset.out, std::move(result));
+}
+
+batch::BatchResult run_visibility_job(const VisibilityJobOptions& options) {
+  RunControl control;
+  control.keep_results = false;
+  return run_visibility(options, control).run;
 }
 
 }  // namespace clutterscope::jobs

@@ -31,6 +31,7 @@
 // no final tables; `clutterscope merge DIR... --out DIR` (or a later run without --shard into
 // a folder holding every part) writes the final files. Shards may share one OUT folder.
 
+#include <atomic>
 #include <clutterscope/datasets/scene.hpp>
 #include <cstdint>
 #include <filesystem>
@@ -49,6 +50,15 @@ class FileDigestCache;  // input_digest.hpp
 // A command-line or job-setup mistake by the user (bad --shard, an --out folder holding a
 // different job, ...). The CLI maps it to exit code 2.
 class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A run stopped through BatchOptions::cancel before every item of its scope was done. The items
+// finished are persisted: the same job run again resumes them, and its final files are those of
+// an uninterrupted run. Not a UsageError: front ends map it to an interruption (exit 130,
+// KeyboardInterrupt).
+class Cancelled : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
@@ -151,6 +161,17 @@ struct BatchOptions {
   bool keep_going = false;     // record DatasetError items as failures instead of aborting
   bool quiet = false;          // no progress output at all
   std::string progress_label;  // shown before the progress bar; defaults to the command
+  // Called after each item this run finishes (ok or failed) with the items done in the run's
+  // scope (resumed ones included) and the scope's size, from the worker thread that ran the
+  // item, one call at a time. It may set `cancel`; an exception it throws stops the run as a
+  // worker's would.
+  std::function<void(std::size_t done, std::size_t total)> on_progress;
+  // Checked before each item: once true, the workers take no further item, the items running
+  // finish and are persisted, and run_batch throws Cancelled. Must outlive the run.
+  const std::atomic<bool>* cancel = nullptr;
+  // Also return the final tables' bytes and summary.json in the BatchResult (memory then grows
+  // with the number of items; the files are written either way).
+  bool keep_results = false;
   bool IsValid(std::string* why) const;
 };
 
@@ -175,10 +196,14 @@ struct BatchResult {
   std::size_t failed = 0;         // failed items in the whole job (or this shard)
   double seconds = 0.0;           // wall time of this run
   double seconds_per_item = 0.0;  // mean time of the per-item function, over computed items
+  // With BatchOptions::keep_results and complete: each final table's bytes as written (header
+  // line and rows, in BatchOutputSpec::tables order) and summary.json's contents.
+  std::vector<std::string> tables;
+  nlohmann::json summary;
   int exit_code() const { return failed > 0 ? 1 : 0; }
 };
 
-// Runs (or resumes) a job. Throws UsageError (bad options, OUT holds a different job),
+// Runs (or resumes) a job. Throws UsageError (bad options, OUT holds a different job), Cancelled,
 // DatasetError (first failing item without keep_going: the message names file, scene,
 // image) and any other exception of a worker, e.g. render::RenderError (the first one is
 // rethrown after all workers stopped; finished items stay persisted for a resume). Callers

@@ -57,8 +57,9 @@ class BatchFolder {
   // Writes the tables and summary.json of a complete job from the parts found in `roots`
   // (ok parts win over failed ones); parts and item files found outside this folder are
   // copied into it. Streams: memory does not depend on the number of items.
-  BatchTotals finalize(const BatchOutputSpec& spec,
-                       const std::vector<std::filesystem::path>& roots) const;
+  // With `kept`, its tables and summary are also filled (BatchResult::tables, summary).
+  BatchTotals finalize(const BatchOutputSpec& spec, const std::vector<std::filesystem::path>& roots,
+                       BatchResult* kept = nullptr) const;
 
  private:
   BatchFolder(std::filesystem::path root, nlohmann::json fingerprint)

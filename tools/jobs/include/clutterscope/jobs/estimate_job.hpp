@@ -7,6 +7,7 @@
 
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/dataset_selection.hpp>
+#include <clutterscope/jobs/run_control.hpp>
 #include <clutterscope/scene_estimation/scene_estimate.hpp>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -43,9 +44,14 @@ nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
 // detector, ...", printed on stderr (unless quiet) after a run without a detections file.
 std::string synthetic_detections_note(const std::vector<datasets::ImageKey>& images);
 
-// Runs (or resumes) the job into options.dataset.out. Throws batch::UsageError for invalid
-// options, datasets::DatasetError for bad data (see batch::run_batch), render::RenderError.
-// Creates the render::WorkerRasterisationScope its workers need.
+// Runs (or resumes) the job into options.dataset.out under `control` (progress, cancellation,
+// the tables estimates.csv and results_bop.csv and summary.json in memory; the belief samples
+// stay files). Throws batch::UsageError for invalid options, datasets::DatasetError for bad data
+// (see batch::run_batch), render::RenderError, Cancelled. Creates the
+// render::WorkerRasterisationScope its workers need.
+JobSummary run_estimate(const EstimateJobOptions& options, const RunControl& control = {});
+
+// run_estimate without a callback and without the results in memory (the CLI's).
 batch::BatchResult run_estimate_job(const EstimateJobOptions& options);
 
 }  // namespace clutterscope::jobs

@@ -34,6 +34,7 @@
 
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/dataset_selection.hpp>
+#include <clutterscope/jobs/run_control.hpp>
 #include <clutterscope/report/by_visibility.hpp>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -104,7 +105,12 @@ batch::BatchOutputSpec evaluate_output_spec();
 // a depth image when vsd is asked for (naming the file), a bad
 // results file (datasets::read_bop_results's checks, and an obj_id that is no model of the
 // dataset or a scene_id / im_id that is no image of the split, naming file, line and field),
-// a missing or inconsistent scene_gt_info.json, bad targets, models or GT.
+// a missing or inconsistent scene_gt_info.json, bad targets, models or GT; Cancelled. `control`:
+// progress, cancellation, and errors.csv, the by-visibility tables and summary.json in memory
+// (scores.json and by_visibility.json stay files).
+JobSummary run_evaluate(const EvaluateJobOptions& options, const RunControl& control = {});
+
+// run_evaluate without a callback and without the results in memory (the CLI's).
 batch::BatchResult run_evaluate_job(const EvaluateJobOptions& options);
 
 // Every check run_evaluate_job makes before it computes anything (options, targets, VSD's

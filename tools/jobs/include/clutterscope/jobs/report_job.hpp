@@ -5,9 +5,9 @@
 // DIR/visibility (their batch runners resume finished images and refuse a different job), then
 // joins and analyses their tables and writes the report files into DIR.
 //
-// run_report does not call the jobs itself: the front end binds them (ReportSteps, filled by the
-// CLI from the flags with the jobs' Options structs; the tests bind fakes), as COLMAP's
-// controllers receive their steps.
+// run_report calls its steps through ReportSteps, as COLMAP's controllers receive theirs:
+// bind_report_steps binds them to the jobs (the CLI and the Python module), the tests bind
+// fakes.
 //
 // The belief figures (paper Fig. 2 d-f, Fig. 3) need belief samples, which the estimate step
 // saves only with --save-beliefs: without it, the drawn images (choose_belief_images) are
@@ -27,12 +27,17 @@
 
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/dataset_selection.hpp>
+#include <clutterscope/jobs/estimate_job.hpp>
+#include <clutterscope/jobs/evaluate_job.hpp>
+#include <clutterscope/jobs/run_control.hpp>
+#include <clutterscope/jobs/visibility_job.hpp>
 #include <clutterscope/notebooks_export/notebook.hpp>
 #include <clutterscope/report/report.hpp>
 #include <filesystem>
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -83,6 +88,26 @@ struct ReportSteps {
   // The GL renderer the steps used ("" when none rendered), for run.json's "gl_renderer".
   std::function<std::string()> renderer;
 };
+
+// The steps' own options, as a front end reads them (`clutterscope report` from the flags it
+// forwards to each step). bind_report_steps sets what the report owns: each step's dataset
+// selection (out: DIR/STEP), the estimate step's variance threshold, confidence radius and seed
+// (the report's analysis ones), the evaluate step's results files (ReportJobOptions::results)
+// and bootstrap seed.
+struct ReportStepOptions {
+  VisibilityJobOptions visibility;
+  EstimateJobOptions estimate;
+  EvaluateJobOptions evaluate;  // used with ReportJobOptions::results only
+};
+
+// The report's steps bound to the jobs with `steps`' options, run under `control` (each step's
+// progress under its name, one cancellation for all; results are not kept in memory: the report
+// reads its steps' tables). Checks both steps' options and reads the dataset selection (its
+// scenes, images, targets and detections) and, with --results, makes every check evaluate makes
+// (the results files line by line among them) before anything is written: throws
+// batch::UsageError, datasets::DatasetError.
+ReportSteps bind_report_steps(const ReportJobOptions& options, const ReportStepOptions& steps,
+                              const RunControl& control = {});
 
 // What one step did in this run.
 struct StepRun {

@@ -9,6 +9,7 @@
 #include <clutterscope/batch/batch.hpp>
 #include <clutterscope/batch/dataset_selection.hpp>
 #include <clutterscope/datasets/depth_check.hpp>
+#include <clutterscope/jobs/run_control.hpp>
 #include <clutterscope/visibility/image_visibility.hpp>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -34,9 +35,13 @@ batch::BatchOutputSpec visibility_output_spec();
 // every result-changing option after defaults.
 nlohmann::json visibility_job_fingerprint(const VisibilityJobOptions& options);
 
-// Runs (or resumes) the job into options.dataset.out. Throws batch::UsageError for invalid
-// options, datasets::DatasetError for bad data (see batch::run_batch), render::RenderError.
-// Creates the render::WorkerRasterisationScope its workers need.
+// Runs (or resumes) the job into options.dataset.out under `control` (progress, cancellation,
+// the tables objects.csv and images.csv and summary.json in memory). Throws batch::UsageError
+// for invalid options, datasets::DatasetError for bad data (see batch::run_batch),
+// render::RenderError, Cancelled. Creates the render::WorkerRasterisationScope its workers need.
+JobSummary run_visibility(const VisibilityJobOptions& options, const RunControl& control = {});
+
+// run_visibility without a callback and without the results in memory (the CLI's).
 batch::BatchResult run_visibility_job(const VisibilityJobOptions& options);
 
 }  // namespace clutterscope::jobs
