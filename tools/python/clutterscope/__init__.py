@@ -214,7 +214,8 @@ def _interactive():
 
 class _Progress:
     """progress=None: a tqdm bar when interactive (a terminal or a notebook), else none;
-    True / False: always / never; a callable: called as progress(done, total)."""
+    True / False: always / never; a callable: called as progress(done, total) after each image
+    (done counts the images resumed from an earlier run too)."""
 
     def __init__(self, progress, label):
         self.callback = progress if callable(progress) else None
@@ -227,8 +228,10 @@ class _Progress:
             except ImportError:
                 self.bar = None
 
-    def __call__(self, done, total):
+    def __call__(self, done, total, step=""):
         if self.bar is not None:
+            if step and self.bar.desc != step:
+                self.bar.set_description(step)
             self.bar.total = total
             self.bar.n = done
             self.bar.refresh()
@@ -246,6 +249,11 @@ def _jobs(jobs):
 
 def _read_csv(path):
     return pd.read_csv(path)
+
+
+def _table(result, name):
+    """A table of the job's result in memory (the bytes of OUT/name) as read_csv reads the file."""
+    return pd.read_csv(io.StringIO(result["tables"][name]))
 
 
 class _Out:
@@ -308,12 +316,11 @@ def visibility(ds, mode="rendered", *, scenes=None, images=None, jobs=None, delt
     """
     ds = ds.select(scenes, images) if scenes is not None or images is not None else ds
     with _Out(out) as folder:
-        _run("visibility", ds, folder, jobs, keep_going, progress, mode=mode, delta_mm=delta_mm,
-             pixel_center=pixel_center, write_bop_info=write_bop_info, masks=masks,
-             overlays=overlays)
-        objects = _read_csv(folder / "objects.csv")
-        return _with_attrs(objects, images=_read_csv(folder / "images.csv"),
-                           summary=json.loads((folder / "summary.json").read_text()))
+        result = _run("visibility", ds, folder, jobs, keep_going, progress, mode=mode,
+                      delta_mm=delta_mm, pixel_center=pixel_center,
+                      write_bop_info=write_bop_info, masks=masks, overlays=overlays)
+    return _with_attrs(_table(result, "objects.csv"), images=_table(result, "images.csv"),
+                       summary=result["summary"])
 
 
 def _read_beliefs(folder):
@@ -363,16 +370,18 @@ def estimate(ds, *, scenes=None, images=None, jobs=None, particles=100, iteratio
     """
     ds = ds.select(scenes, images) if scenes is not None or images is not None else ds
     with _Out(out) as folder:
-        _run("estimate", ds, folder, jobs, keep_going, progress, particles=particles,
-             iterations=iterations, gibbs_sweeps=gibbs_sweeps, icp_samples=icp_samples,
-             variance_threshold_cm2=variance_threshold_cm2,
-             confidence_radius_cm=confidence_radius_cm, seed=seed, observation=observation,
-             detections=None if detections is None else str(detections), beliefs=beliefs,
-             time=time)
-        estimates = _with_attrs(_read_csv(folder / "estimates.csv"),
-                                bop_results=_read_csv(folder / "results_bop.csv"),
-                                summary=json.loads((folder / "summary.json").read_text()))
+        result = _run("estimate", ds, folder, jobs, keep_going, progress, particles=particles,
+                      iterations=iterations, gibbs_sweeps=gibbs_sweeps, icp_samples=icp_samples,
+                      variance_threshold_cm2=variance_threshold_cm2,
+                      confidence_radius_cm=confidence_radius_cm, seed=seed,
+                      observation=observation,
+                      detections=None if detections is None else str(detections),
+                      beliefs=beliefs, time=time)
+        estimates = _with_attrs(_table(result, "estimates.csv"),
+                                bop_results=_table(result, "results_bop.csv"),
+                                summary=result["summary"])
         if beliefs:
+            # One file per image (beliefs/SPLIT/SCENE/IMID.csv), not a table of the job.
             return estimates, _read_beliefs(folder)
         return estimates
 
@@ -388,17 +397,19 @@ class Evaluation:
     summary.json.
     """
 
-    def __init__(self, folder):
-        self.tables = {path.stem: _read_csv(path) for path in sorted(folder.glob("*.csv"))}
+    def __init__(self, result, folder):
+        self.tables = {Path(name).stem: _table(result, name) for name in sorted(result["tables"])
+                       if "/" not in name}
         self.errors = self.tables["errors"]
         self.by_visibility = self.tables.get("by_visibility_recall")
+        # scores.json is written beside the tables (bop_toolkit's keys), not a table.
         self.scores_json = json.loads((folder / "scores.json").read_text())
         keys = ["bop19_average_recall", "bop19_average_recall_vsd", "bop19_average_recall_mssd",
                 "bop19_average_recall_mspd", "bop19_average_time_per_image"]
         self.scores = pd.DataFrame(
             [{"method": method, **{k: entry.get(k) for k in keys}}
              for method, entry in self.scores_json.items()])
-        self.summary = json.loads((folder / "summary.json").read_text())
+        self.summary = result["summary"]
 
     def __repr__(self):
         return f"Evaluation(methods={list(self.scores['method'])}, errors={len(self.errors)} rows)"
@@ -429,11 +440,12 @@ def evaluate(ds, results, *, scenes=None, images=None, jobs=None, errors=None,
     ds = ds.select(scenes, images) if scenes is not None or images is not None else ds
     files = [str(results)] if isinstance(results, (str, os.PathLike)) else [str(r) for r in results]
     with _Out(out) as folder:
-        _run("evaluate", ds, folder, jobs, keep_going, progress, results=files,
-             errors=None if errors is None else list(errors), vsd_delta_mm=vsd_delta_mm,
-             scene_visibility_images=None if scene_visibility_images is None
-             else str(scene_visibility_images))
-        return Evaluation(folder)
+        result = _run("evaluate", ds, folder, jobs, keep_going, progress, results=files,
+                      errors=None if errors is None else list(errors),
+                      vsd_delta_mm=vsd_delta_mm,
+                      scene_visibility_images=None if scene_visibility_images is None
+                      else str(scene_visibility_images))
+        return Evaluation(result, folder)
 
 
 class Report:

@@ -17,6 +17,7 @@
 #include <clutterscope/jobs/estimate_job.hpp>
 #include <clutterscope/jobs/evaluate_job.hpp>
 #include <clutterscope/jobs/report_job.hpp>
+#include <clutterscope/jobs/run_control.hpp>
 #include <clutterscope/jobs/visibility_job.hpp>
 #include <clutterscope/notebooks_export/notebook.hpp>
 #include <clutterscope/render/context.hpp>
@@ -28,6 +29,7 @@
 #include <cstring>
 #include <filesystem>
 #include <functional>
+#include <future>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -43,6 +45,10 @@ namespace clutterscope::python {
 namespace {
 
 namespace fs = std::filesystem;
+
+py::object to_python(const nlohmann::json& json) {
+  return py::module_::import("json").attr("loads")(json.dump());
+}
 
 py::object to_python(const nlohmann::ordered_json& json) {
   return py::module_::import("json").attr("loads")(json.dump());
@@ -166,103 +172,90 @@ std::pair<py::array_t<float>, py::array_t<std::int32_t>> render_depth(
   return {image_array<float>(image.depth), image_array<std::int32_t>(image.labels)};
 }
 
-// Runs a job on a thread of its own while the calling (Python) thread waits with the GIL
-// released, waking every 100 ms to check for signals: Python runs its signal handlers on the
-// main thread only, so Ctrl-C (KeyboardInterrupt) is seen there and cancels the job through
-// cancelled(). The job's progress reports are handed to the Python callable on this thread, as
-// is an exception it raises (which cancels the job too). The Python exception, or else the
-// job's, is rethrown once the job has stopped: its finished images stay persisted for a
-// resume.
+// Runs a job under a RunControl whose progress calls the Python callable and whose cancel token
+// stops the job between images. The job runs on a thread of its own while the calling (Python)
+// thread waits with the GIL released, waking every 100 ms to run Python's signal handlers, which
+// run on the main thread only: Ctrl-C (KeyboardInterrupt) cancels the job there. The progress
+// callable is called from the worker that finished an image, with the GIL held for the call; an
+// exception it raises cancels the job too. Once the job has stopped, the Python exception (the
+// cause of a cancellation) or else the job's is raised: finished images stay persisted, so the
+// same call resumes them.
 class Monitor {
  public:
   explicit Monitor(py::object callback) : callback_(std::move(callback)) {}
 
-  // Thread-safe, for the job's progress callback.
-  void report(std::size_t done, std::size_t total) {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    done_ = done;
-    total_ = total;
-    changed_ = true;
+  jobs::RunControl control() {
+    jobs::RunControl control;
+    control.cancel = cancel_;
+    control.progress = [this](const jobs::Progress& progress) { on_progress(progress); };
+    return control;
   }
-  bool cancelled() const { return cancelled_.load(); }
 
   template <class Result>
   Result run(const std::function<Result()>& job) {
-    std::optional<Result> result;
-    std::exception_ptr job_error;
-    std::atomic<bool> finished{false};
+    std::packaged_task<Result()> task(job);
+    std::future<Result> result = task.get_future();
     {
       py::gil_scoped_release release;
-      std::thread thread([&] {
-        try {
-          result = job();
-        } catch (...) {
-          job_error = std::current_exception();
-        }
-        finished = true;
-      });
-      while (!finished) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      std::thread thread(std::move(task));
+      while (result.wait_for(std::chrono::milliseconds(100)) != std::future_status::ready) {
         const py::gil_scoped_acquire gil;
-        poll();
+        check_signals();
       }
       thread.join();
     }
-    poll();  // the last report
-    // A cancelled job may stop with an error of its own: the cause is the Python one.
-    if (python_error_) throw py::error_already_set(*python_error_);
-    if (job_error) std::rethrow_exception(job_error);
-    return *result;
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      if (python_error_) throw py::error_already_set(*python_error_);
+    }
+    return result.get();  // or the job's exception
   }
 
  private:
-  // With the GIL held: a pending signal, then the latest report to the callable.
-  void poll() {
-    if (cancelled_) return;
-    if (PyErr_CheckSignals() != 0) {
-      cancel();
-      return;
-    }
-    std::size_t done = 0, total = 0;
-    {
-      const std::lock_guard<std::mutex> lock(mutex_);
-      if (!changed_) return;
-      changed_ = false;
-      done = done_;
-      total = total_;
-    }
+  // On a worker thread, without the GIL.
+  void on_progress(const jobs::Progress& progress) {
+    if (cancel_.cancelled()) return;
+    const py::gil_scoped_acquire gil;
     if (callback_.is_none()) return;
     try {
-      callback_(done, total);
+      callback_(progress.done, progress.total, progress.step);
     } catch (py::error_already_set& error) {
-      error.restore();
-      cancel();
+      fail(std::move(error));
     }
   }
-  void cancel() {
-    python_error_ = std::make_shared<py::error_already_set>();  // fetches the raised error
-    cancelled_ = true;
+  // On the calling thread, with the GIL.
+  void check_signals() {
+    if (cancel_.cancelled()) return;
+    if (PyErr_CheckSignals() != 0) fail(py::error_already_set());  // fetches the raised error
+  }
+  void fail(py::error_already_set error) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (!python_error_) python_error_ = std::make_shared<py::error_already_set>(std::move(error));
+    cancel_.cancel();
   }
 
   py::object callback_;
+  jobs::CancelToken cancel_;
   std::mutex mutex_;
-  std::size_t done_ = 0, total_ = 0;
-  bool changed_ = false;
-  std::atomic<bool> cancelled_{false};
   std::shared_ptr<py::error_already_set> python_error_;
 };
 
-// What a batch run did, for Python.
-py::dict result_dict(const batch::BatchResult& result, const fs::path& out) {
+// What a batch job did, for Python: the runner's counts, and the tables (file name -> the
+// file's bytes) and summary.json in memory.
+py::dict summary_dict(const jobs::JobSummary& job) {
   py::dict dict;
-  dict["out"] = out.string();
-  dict["complete"] = result.complete;
-  dict["computed"] = result.computed;
-  dict["resumed"] = result.resumed;
-  dict["changed"] = result.changed;
-  dict["failed"] = result.failed;
-  dict["seconds"] = result.seconds;
-  dict["exit_code"] = result.exit_code();
+  dict["out"] = job.out.string();
+  dict["complete"] = job.run.complete;
+  dict["computed"] = job.run.computed;
+  dict["resumed"] = job.run.resumed;
+  dict["changed"] = job.run.changed;
+  dict["failed"] = job.run.failed;
+  dict["seconds"] = job.run.seconds;
+  dict["exit_code"] = job.exit_code();
+  py::dict tables;
+  for (const jobs::Table& table : job.tables) tables[py::str(table.file_name)] = table.text;
+  dict["tables"] = tables;
+  dict["summary"] = to_python(job.summary);
   return dict;
 }
 
@@ -352,25 +345,25 @@ jobs::EvaluateJobOptions evaluate_options(const Dataset& dataset, const py::dict
 py::dict run_visibility(const Dataset& dataset, const py::dict& kw) {
   const jobs::VisibilityJobOptions options = visibility_options(dataset, kw);
   Monitor monitor(kw["progress"]);
-  const batch::BatchResult result =
-      monitor.run<batch::BatchResult>([&options] { return jobs::run_visibility_job(options); });
-  return result_dict(result, options.dataset.out);
+  const jobs::RunControl control = monitor.control();
+  return summary_dict(monitor.run<jobs::JobSummary>(
+      [&options, &control] { return jobs::run_visibility(options, control); }));
 }
 
 py::dict run_estimate(const Dataset& dataset, const py::dict& kw) {
   const jobs::EstimateJobOptions options = estimate_options(dataset, kw);
   Monitor monitor(kw["progress"]);
-  const batch::BatchResult result =
-      monitor.run<batch::BatchResult>([&options] { return jobs::run_estimate_job(options); });
-  return result_dict(result, options.dataset.out);
+  const jobs::RunControl control = monitor.control();
+  return summary_dict(monitor.run<jobs::JobSummary>(
+      [&options, &control] { return jobs::run_estimate(options, control); }));
 }
 
 py::dict run_evaluate(const Dataset& dataset, const py::dict& kw) {
   const jobs::EvaluateJobOptions options = evaluate_options(dataset, kw);
   Monitor monitor(kw["progress"]);
-  const batch::BatchResult result =
-      monitor.run<batch::BatchResult>([&options] { return jobs::run_evaluate_job(options); });
-  return result_dict(result, options.dataset.out);
+  const jobs::RunControl control = monitor.control();
+  return summary_dict(monitor.run<jobs::JobSummary>(
+      [&options, &control] { return jobs::run_evaluate(options, control); }));
 }
 
 // --name value as `report` forwards an option to its steps (jobs::GivenOptions).
@@ -400,10 +393,10 @@ py::dict run_report(const Dataset& dataset, const py::dict& kw) {
   visibility_kw["masks"] = false;
   visibility_kw["overlays"] = false;
   visibility_kw["delta_mm"] = kw["delta_mm"];
-  jobs::VisibilityJobOptions visibility = visibility_options(dataset, visibility_kw);
+  const jobs::VisibilityJobOptions visibility = visibility_options(dataset, visibility_kw);
   py::dict estimate_kw = kw.attr("copy")();
   estimate_kw["beliefs"] = false;
-  jobs::EstimateJobOptions estimate = estimate_options(dataset, estimate_kw);
+  const jobs::EstimateJobOptions estimate = estimate_options(dataset, estimate_kw);
   give(&options.visibility_given, "--mode", kw["mode"]);
   give(&options.visibility_given, "--delta-mm", kw["delta_mm"]);
   give(&options.visibility_given, "--pixel-center", kw["pixel_center"]);
@@ -415,36 +408,12 @@ py::dict run_report(const Dataset& dataset, const py::dict& kw) {
   }
   if (!kw["time"].cast<bool>()) options.estimate_given["--no-time"] = "";
 
-  datasets::BopDataset opened = batch::open_dataset(options.dataset);
-  if (!estimate.detections.empty() && estimate.detections != jobs::kSyntheticDetections) {
-    opened.attach_detections(estimate.detections);
-  }
-  batch::list_selected_images(opened, options.dataset);
-
-  jobs::ReportSteps steps;
-  steps.renderer = render::renderer_in_use;
-  steps.visibility_options = jobs::visibility_job_fingerprint(visibility);
-  steps.estimate_options = jobs::estimate_job_fingerprint(estimate, opened);
-  steps.visibility = [&visibility](const fs::path& out) {
-    jobs::VisibilityJobOptions job = visibility;
-    job.dataset.out = out.string();
-    return jobs::run_visibility_job(job);
-  };
-  steps.estimate = [&estimate](const fs::path& out) {
-    jobs::EstimateJobOptions job = estimate;
-    job.dataset.out = out.string();
-    return jobs::run_estimate_job(job);
-  };
-  steps.beliefs = [&estimate](const datasets::ImageKey& image, const fs::path& out) {
-    jobs::EstimateJobOptions job = estimate;
-    job.dataset.out = out.string();
-    job.dataset.scenes = std::to_string(image.scene_id);
-    job.dataset.images = std::to_string(image.im_id);
-    job.dataset.jobs = 1;
-    job.save_beliefs = true;
-    return jobs::run_estimate_job(job);
-  };
   Monitor monitor(kw["progress"]);
+  // Both steps' options and the dataset selection are checked before anything is written.
+  jobs::ReportStepOptions step_options;
+  step_options.visibility = visibility;
+  step_options.estimate = estimate;
+  const jobs::ReportSteps steps = jobs::bind_report_steps(options, step_options, monitor.control());
   const jobs::ReportRun run =
       monitor.run<jobs::ReportRun>([&] { return jobs::run_report(options, steps); });
   py::dict result;
