@@ -7,8 +7,8 @@ import json
 import math
 import os
 import shutil
+import signal
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -144,6 +144,21 @@ def test_cancelled_visibility_resumes_to_the_same_result(tray6, tmp_path):
     pd.testing.assert_frame_equal(resumed, whole)
     run = json.loads((tmp_path / "out/run.json").read_text())
     assert run["resumed"] >= 2, run
+
+
+def test_ctrl_c_cancels_a_batch_that_resumes(tray6, tmp_path):
+    """SIGINT while the batch runs (the main thread waits in C++): KeyboardInterrupt, and the
+    finished images are resumed by the same call."""
+    ds = clutterscope.Dataset(tray6)
+
+    def press_ctrl_c(done, total):
+        if done == 1:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    with pytest.raises(KeyboardInterrupt):
+        clutterscope.visibility(ds, jobs=1, out=tmp_path / "out", progress=press_ctrl_c)
+    resumed = clutterscope.visibility(ds, jobs=1, out=tmp_path / "out", progress=False)
+    pd.testing.assert_frame_equal(resumed, clutterscope.visibility(ds, jobs=1, progress=False))
 
 
 # estimate.

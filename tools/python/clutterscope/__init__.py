@@ -398,8 +398,11 @@ class Evaluation:
     """
 
     def __init__(self, result, folder):
-        self.tables = {Path(name).stem: _table(result, name) for name in sorted(result["tables"])
-                       if "/" not in name}
+        # errors.csv from memory; the by-visibility tables are written by the job's summary
+        # (not tables of its batch), so they are read from the folder.
+        self.tables = {path.stem: _read_csv(path) for path in sorted(folder.glob("*.csv"))}
+        self.tables.update({Path(name).stem: _table(result, name)
+                            for name in result["tables"] if "/" not in name})
         self.errors = self.tables["errors"]
         self.by_visibility = self.tables.get("by_visibility_recall")
         # scores.json is written beside the tables (bop_toolkit's keys), not a table.
