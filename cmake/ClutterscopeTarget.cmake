@@ -44,14 +44,16 @@ function(clutterscope_add_library name)
     # A folder with headers only so far.
     add_library(clutterscope_${name} INTERFACE)
     add_library(clutterscope::${name} ALIAS clutterscope_${name})
-    target_include_directories(clutterscope_${name} INTERFACE ${CMAKE_CURRENT_SOURCE_DIR}/include)
+    target_include_directories(clutterscope_${name} INTERFACE
+      $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include> $<INSTALL_INTERFACE:include>)
     target_link_libraries(clutterscope_${name} INTERFACE ${ARG_PUBLIC_DEPS})
+    _clutterscope_register_library(${name})
     return()
   endif()
   add_library(clutterscope_${name} STATIC ${sources})
   add_library(clutterscope::${name} ALIAS clutterscope_${name})
   target_include_directories(clutterscope_${name}
-    PUBLIC $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
+    PUBLIC $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include> $<INSTALL_INTERFACE:include>
     PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src)
   target_link_libraries(clutterscope_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   # The Python module (a shared object) links the libraries: their code must be PIC.
@@ -59,6 +61,15 @@ function(clutterscope_add_library name)
     set_target_properties(clutterscope_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
   endif()
   clutterscope_configure_target(clutterscope_${name})
+  _clutterscope_register_library(${name})
+endfunction()
+
+# Every library is installed and exported as clutterscope::<name> (cmake/Install.cmake), with
+# its public headers include/clutterscope/<name>/.
+function(_clutterscope_register_library name)
+  set_target_properties(clutterscope_${name} PROPERTIES EXPORT_NAME ${name})
+  set_property(GLOBAL APPEND PROPERTY CLUTTERSCOPE_LIBRARIES ${name})
+  set_property(GLOBAL APPEND PROPERTY CLUTTERSCOPE_INCLUDE_DIRS ${CMAKE_CURRENT_SOURCE_DIR}/include)
 endfunction()
 
 # Compiles the files of DIR matching GLOBS into TARGET as string literals (cmake/embed_files.cmake

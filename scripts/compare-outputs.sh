@@ -47,8 +47,9 @@
 #     were copied.
 #   - normalised: every run.json (batch commands' and report's): the values of "seconds",
 #     "seconds_per_image" and "images_per_second", at any depth, become null (wall times), and
-#     "peak_memory_mib" (the process's, added after the baseline was recorded) is left out; the
-#     rest (computed/resumed/failed counts, jobs, version) is compared.
+#     "peak_memory_mib" (the process's), "git_commit" and "git_tree_dirty" (the build's; all
+#     added after the baseline was recorded) are left out; the rest (computed/resumed/failed
+#     counts, jobs, version) is compared.
 #   - normalised: in every file without a NUL byte (text: JSON, CSV, TSV, HTML, SVG, ipynb,
 #     stdout), the scratch folder's absolute path becomes @SCRATCH@: the dataset (and
 #     --detections) paths in summary.json (visibility, estimate, report, simulate), in the
@@ -154,7 +155,8 @@ import hashlib, json, os, sys
 scratch = sys.argv[1]
 roots = sorted({scratch, os.path.realpath(scratch)}, key=len, reverse=True)
 TIMES = {"seconds", "seconds_per_image", "images_per_second"}
-MACHINE = {"peak_memory_mib"}  # of this run's process, and newer than the baseline
+# Of this run's process and build (the commit differs with every commit), newer than the baseline.
+MACHINE = {"peak_memory_mib", "git_commit", "git_tree_dirty"}
 
 def drop_times(value):
     if isinstance(value, dict):

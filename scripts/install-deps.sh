@@ -17,6 +17,8 @@ packages=(
   libegl-dev libopengl-dev libgl-dev libegl1 libopengl0 libegl-mesa0 libgl1-mesa-dri
   # tests
   googletest libgtest-dev libgmock-dev
+  # the .deb test (cpack -G DEB runs dpkg-shlibdeps)
+  dpkg-dev
   # report checks: a real browser and Jupyter to execute the exported notebook
   chromium
   jupyter-nbconvert python3-nbclient python3-nbformat python3-ipykernel

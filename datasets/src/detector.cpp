@@ -199,6 +199,14 @@ bool written_by_detections_writer(const std::filesystem::path& path) {
 
 DetectionsWriter::DetectionsWriter(std::filesystem::path path)
     : path_(std::move(path)), temporary_(path_.string() + ".partial") {
+  // The folders this writer creates go again when it does not finish: a failed run leaves
+  // nothing behind.
+  std::error_code error;
+  for (std::filesystem::path folder = path_.parent_path();
+       !folder.empty() && !std::filesystem::exists(folder, error); folder = folder.parent_path()) {
+    created_folders_.push_back(folder);
+    if (folder == folder.parent_path()) break;
+  }
   if (path_.has_parent_path()) create_folders(path_.parent_path());
   stream_.open(temporary_, std::ios::binary | std::ios::trunc);
   if (!stream_) throw_write_error(temporary_, errno);
@@ -210,6 +218,10 @@ DetectionsWriter::~DetectionsWriter() {
     stream_.close();
     std::error_code ignored;
     std::filesystem::remove(temporary_, ignored);
+    // Only empty folders are removed: anything else put there meanwhile stays.
+    for (const std::filesystem::path& folder : created_folders_) {
+      std::filesystem::remove(folder, ignored);
+    }
   }
 }
 

@@ -5,6 +5,8 @@
 
 #include <chrono>
 #include <clutterscope/batch/batch.hpp>
+#include <clutterscope/batch/build_info.hpp>
+#include <clutterscope/batch/run_record.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <fstream>
 #include <thread>
@@ -220,6 +222,29 @@ TEST(Batch, AFailedItemIsNotCountedAsComputed) {
   const auto summary = nlohmann::json::parse(read_file(out / "summary.json"));
   EXPECT_EQ(summary["totals"]["ok"], 5);
   EXPECT_EQ(nlohmann::json::parse(read_file(out / "run.json"))["computed"], 5);
+}
+
+// run.json names the build that ran: version, commit (null when built outside git) and dirty,
+// also after record_renderer rewrites it.
+TEST(Batch, RunJsonRecordsVersionAndCommit) {
+  FakeJobOptions fake;
+  fake.scenes = 1;
+  fake.images_per_scene = 2;
+  const fs::path out = fresh_dir("run_json_commit");
+  run_batch(fake_job(out, fake), options_for(out, 1));
+  for (int pass = 0; pass < 2; ++pass) {
+    const auto run = nlohmann::json::parse(read_file(out / "run.json"));
+    EXPECT_EQ(run.at("tool_version"), CLUTTERSCOPE_VERSION);
+    const std::string commit = git_commit();
+    if (commit.empty()) {
+      EXPECT_TRUE(run.at("git_commit").is_null());
+      EXPECT_TRUE(run.at("git_tree_dirty").is_null());
+    } else {
+      EXPECT_EQ(run.at("git_commit"), commit);
+      EXPECT_EQ(run.at("git_tree_dirty"), git_tree_dirty());
+    }
+    record_renderer(out, "test renderer");
+  }
 }
 
 TEST(Batch, ShardsMergeToTheBytesOfOneRun) {

@@ -34,6 +34,23 @@ TEST(Formats, AsPrintfWrites) {
   EXPECT_EQ(printf_general(-0.0, 3), "-0");
 }
 
+TEST(Formats, CountsTakeTheNounInTheRightNumber) {
+  EXPECT_EQ(count_text(1, "image"), "1 image");
+  EXPECT_EQ(count_text(0, "image"), "0 images");
+  EXPECT_EQ(count_text(2, "scene"), "2 scenes");
+  EXPECT_EQ(count_text(1, "box", "boxes"), "1 box");
+  EXPECT_EQ(count_text(5, "box", "boxes"), "5 boxes");
+}
+
+TEST(Formats, SecondsAreRoundedForPeople) {
+  EXPECT_EQ(seconds_text(0.859361), "0.859 s");
+  EXPECT_EQ(seconds_text(12.3456), "12.3 s");
+  EXPECT_EQ(seconds_text(99.94), "99.9 s");
+  EXPECT_EQ(seconds_text(245.6), "246 s");
+  EXPECT_EQ(seconds_text(123456.7), "123457 s");
+  EXPECT_EQ(seconds_text(0.0), "0 s");
+}
+
 TEST(Formats, Hex64) {
   EXPECT_EQ(format_hex64(255), "00000000000000ff");
   EXPECT_EQ(format_hex64(~0ull), "ffffffffffffffff");

@@ -32,6 +32,18 @@ TEST(Progress, WithoutTerminalPrintsOneSummaryLine) {
   EXPECT_EQ(output.find('\r'), std::string::npos);
 }
 
+TEST(Progress, OneItemIsSingular) {
+  ::testing::internal::CaptureStderr();
+  {
+    Progress progress("render", 1, 0, Progress::Style::kSummaryOnly);
+    progress.item_done();
+    progress.finish(0);
+  }
+  const std::string output = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(output.rfind("render: 1/1 image (1 computed, 0 resumed, 0 failed) in ", 0), 0u)
+      << output;
+}
+
 TEST(Progress, BarShowsCountRateAndEtaAndIsThrottled) {
   ::testing::internal::CaptureStderr();
   {

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <chrono>
+#include <clutterscope/cli/cli.hpp>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -17,6 +19,7 @@ namespace fs = std::filesystem;
 
 using clutterscope::testing::CommandRun;
 using clutterscope::testing::run_merged;
+using clutterscope::testing::run_shell;
 
 // The command names listed under "Subcommands:" in `clutterscope --help`.
 std::vector<std::string> listed_commands(const std::string& help) {
@@ -43,10 +46,79 @@ TEST(Cli, BinaryExists) {
   ASSERT_TRUE(fs::exists(CLUTTERSCOPE_BINARY)) << "build the clutterscope target first";
 }
 
-TEST(Cli, Version) {
+// The commit of SOURCE_DIR when it is the top of a git tree, else "" (a source tarball).
+std::string git_head(const fs::path& source_dir) {
+  const std::string git = "git -C " + testing::quoted(source_dir);
+  std::string top = run_shell(git + " rev-parse --show-toplevel 2>/dev/null").output;
+  if (top.empty()) return "";
+  top.pop_back();
+  std::error_code ignored;
+  if (fs::weakly_canonical(top, ignored) != fs::weakly_canonical(source_dir, ignored)) return "";
+  std::string head = run_shell(git + " rev-parse HEAD").output;
+  if (!head.empty()) head.pop_back();
+  return head;
+}
+
+// cmake/git_commit.cmake on SOURCE_DIR into OUTPUT; the generated source's text.
+std::string generate_commit_source(const fs::path& source_dir, const fs::path& output) {
+  const CommandRun run = run_shell(
+      testing::quoted(CLUTTERSCOPE_CMAKE_COMMAND) + " -DSOURCE_DIR=" + testing::quoted(source_dir) +
+      " -DOUTPUT=" + testing::quoted(output) + " -P " +
+      testing::quoted(fs::path(CLUTTERSCOPE_SOURCE_DIR) / "cmake" / "git_commit.cmake") + " 2>&1");
+  EXPECT_EQ(run.exit_code, 0) << run.output;
+  return testing::read_file(output);
+}
+
+TEST(Cli, VersionNamesTheCommitItWasBuiltFrom) {
   const CommandRun result = run_merged("--version");
   EXPECT_EQ(result.exit_code, 0);
-  EXPECT_EQ(result.output, std::string("clutterscope ") + CLUTTERSCOPE_VERSION + "\n");
+  const std::string prefix = std::string("clutterscope ") + CLUTTERSCOPE_VERSION + " (";
+  ASSERT_EQ(result.output.rfind(prefix, 0), 0u) << result.output;
+  // Built here from this tree (the test runs after the build): the same commit as git says.
+  const std::string head = git_head(CLUTTERSCOPE_SOURCE_DIR);
+  if (head.empty()) {
+    EXPECT_EQ(result.output, prefix + "unknown commit: not built from a git tree)\n");
+  } else {
+    EXPECT_TRUE(result.output == prefix + "commit " + head + ")\n" ||
+                result.output == prefix + "commit " + head + ", dirty)\n")
+        << result.output << "HEAD is " << head;
+  }
+}
+
+// The script behind --version: the commit and "dirty" of a tree, unknown outside git, and the
+// generated source rewritten only when that changes (so a build after no commit rebuilds nothing).
+TEST(Cli, CommitScriptFollowsTheTreeAndRewritesOnlyOnChange) {
+  const fs::path tree = testing::fresh_dir("cli_git_commit_tree");
+  const fs::path output = testing::fresh_dir("cli_git_commit_out") / "git_commit.cpp";
+  EXPECT_NE(generate_commit_source(tree, output).find("git_commit() { return \"\"; }"),
+            std::string::npos);  // not a git tree
+
+  const std::string git =
+      "git -C " + testing::quoted(tree) + " -c user.name=test -c user.email=test@example.invalid ";
+  std::ofstream(tree / "file.txt") << "one\n";
+  ASSERT_EQ(
+      run_shell(git + "init -q && " + git + "add file.txt && " + git + "commit -q -m one 2>&1")
+          .exit_code,
+      0);
+  const std::string head = git_head(tree);
+  ASSERT_EQ(head.size(), 40u);
+  std::string text = generate_commit_source(tree, output);
+  EXPECT_NE(text.find("git_commit() { return \"" + head + "\"; }"), std::string::npos) << text;
+  EXPECT_NE(text.find("git_tree_dirty() { return false; }"), std::string::npos) << text;
+
+  // Unchanged: not rewritten.
+  const auto written = fs::last_write_time(output);
+  fs::last_write_time(output, written - std::chrono::hours(1));
+  generate_commit_source(tree, output);
+  EXPECT_EQ(fs::last_write_time(output), written - std::chrono::hours(1));
+
+  std::ofstream(tree / "untracked.txt") << "not part of the tree\n";
+  EXPECT_NE(generate_commit_source(tree, output).find("git_tree_dirty() { return false; }"),
+            std::string::npos);
+  std::ofstream(tree / "file.txt") << "two\n";
+  text = generate_commit_source(tree, output);
+  EXPECT_NE(text.find("git_commit() { return \"" + head + "\"; }"), std::string::npos) << text;
+  EXPECT_NE(text.find("git_tree_dirty() { return true; }"), std::string::npos) << text;
 }
 
 TEST(Cli, HelpListsCommandsAndExitCodes) {
@@ -93,6 +165,22 @@ TEST(Cli, UsageErrorsExitTwo) {
     EXPECT_EQ(result.exit_code, 2) << arguments << ":\n" << result.output;
     EXPECT_FALSE(result.output.empty()) << arguments;
   }
+}
+
+TEST(Cli, AnUnknownCommandIsNamedWithTheCommandsThereAre) {
+  CommandRun result = run_merged("frobnicate");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.output.find("unknown command 'frobnicate'"), std::string::npos) << result.output;
+  EXPECT_EQ(result.output.find("A subcommand is required"), std::string::npos) << result.output;
+  for (const std::string& command : command_names()) {
+    EXPECT_NE(result.output.find(" " + command), std::string::npos) << command;
+  }
+  result = run_merged("bench frobnicate");
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.output.find("unknown command 'frobnicate' for clutterscope bench; the "
+                               "commands are: visibility"),
+            std::string::npos)
+      << result.output;
 }
 
 TEST(Cli, MergeRefusesAFolderThatIsNotABatch) {

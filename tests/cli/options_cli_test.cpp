@@ -178,5 +178,55 @@ TEST(ExitCodes, EachHelpStatesItsCommandsOwnExitCodes) {
   }
 }
 
+// Every command that reads a dataset takes the shared dataset options (issue 27, item 5):
+// detect, graph, render and simulate declared theirs by hand and lacked three of them.
+TEST(DatasetOptions, EveryCommandReadingADatasetTakesTheSharedOnes) {
+  for (const char* command :
+       {"visibility", "estimate", "evaluate", "report", "detect", "graph", "render", "simulate"}) {
+    const std::set<std::string> options = options_of(command);
+    for (const char* option : {"--split", "--split-type", "--models-dir", "--targets"}) {
+      EXPECT_EQ(options.count(option), 1u) << command << " lacks " << option;
+    }
+  }
+}
+
+TEST(DatasetOptions, GraphReadsAnotherModelsFolderSplitTypeAndTargets) {
+  const fs::path root = testing::fresh_dir("options_graph_layout") / "data";
+  testing::TinyBopOptions layout;
+  layout.split = "test_primesense";
+  testing::write_tiny_bop_dataset(root, layout);
+  fs::rename(root / "models", root / "models_eval");
+  const std::string base = "graph " + quoted(root) + " --split test --split-type primesense";
+  // Without --models-dir the models are missing: bad input data.
+  EXPECT_EQ(run_clutterscope(base).exit_code, 3);
+  const CommandRun all = run_clutterscope(base + " --models-dir models_eval");
+  EXPECT_EQ(all.exit_code, 0) << all.errors;
+  EXPECT_NE(all.errors.find("graph: 1 scene; "), std::string::npos) << all.errors;
+  EXPECT_NE(all.errors.find("(2 images)"), std::string::npos) << all.errors;
+  // bop24 targets list images only: image 1 of scene 1.
+  testing::write_text(root / "targets.json", R"([{"im_id": 1, "scene_id": 1}])");
+  const CommandRun targets = run_clutterscope(base + " --models-dir models_eval --targets " +
+                                              quoted(root / "targets.json"));
+  EXPECT_EQ(targets.exit_code, 0) << targets.errors;
+  EXPECT_NE(targets.errors.find("(1 image)"), std::string::npos) << targets.errors;
+  // --write writes whole scenes' graphs: not a targets' subset.
+  EXPECT_EQ(run_clutterscope(base + " --models-dir models_eval --write --targets " +
+                             quoted(root / "targets.json"))
+                .exit_code,
+            2);
+}
+
+// `detect --out DIR/` names a folder: refused before anything is created (it used to leave an
+// empty DIR behind).
+TEST(DatasetOptions, DetectOutEndingInASlashLeavesNothingBehind) {
+  const fs::path root = testing::fresh_dir("options_detect_slash");
+  testing::write_tiny_bop_dataset(root / "data");
+  const CommandRun result =
+      run_clutterscope("detect " + quoted(root / "data") + " --out " + quoted(root / "new") + "/");
+  EXPECT_EQ(result.exit_code, 2) << result.errors;
+  EXPECT_NE(result.errors.find("ends with '/'"), std::string::npos) << result.errors;
+  EXPECT_FALSE(fs::exists(root / "new"));
+}
+
 }  // namespace
 }  // namespace clutterscope::cli

@@ -80,6 +80,11 @@ void check_outputs(const fs::path& out, const nlohmann::json& summary) {
     const std::string picture = testing::read_file(out / "rounds" / name);
     EXPECT_NE(picture.find("<svg"), std::string::npos) << name;
     EXPECT_NE(picture.find("data:image/png;base64,"), std::string::npos) << name;
+    // The pick order is drawn on the image: one tag "#k" per attempted pick (issue 27).
+    for (int k = 1; k <= round.at("picks").get<int>() + round.at("failed_picks").get<int>(); ++k) {
+      EXPECT_NE(picture.find("paint-order=\"stroke\">#" + std::to_string(k)), std::string::npos)
+          << name << " lacks pick #" << k;
+    }
   }
   EXPECT_EQ(rows.size() - 1, expected_rows);
   EXPECT_EQ(summary.at("failures").size(), summary.at("failed_picks").get<std::size_t>());

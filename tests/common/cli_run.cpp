@@ -39,10 +39,7 @@ std::size_t occurrences(const std::string& text, const std::string& part) {
   return count;
 }
 
-CommandRun run_clutterscope(const std::string& arguments, Stderr stderr_mode) {
-  const fs::path errors_file = stderr_capture_file();
-  std::string command = quoted(CLUTTERSCOPE_BINARY) + " " + arguments;
-  command += stderr_mode == Stderr::kSeparate ? " 2>" + quoted(errors_file) : " 2>&1";
+CommandRun run_shell(const std::string& command) {
   CommandRun result;
   FILE* pipe = ::popen(command.c_str(), "r");
   if (pipe == nullptr) return result;
@@ -54,6 +51,14 @@ CommandRun run_clutterscope(const std::string& arguments, Stderr stderr_mode) {
   const int status = ::pclose(pipe);
   result.signalled = WIFSIGNALED(status);
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+CommandRun run_clutterscope(const std::string& arguments, Stderr stderr_mode) {
+  const fs::path errors_file = stderr_capture_file();
+  std::string command = quoted(CLUTTERSCOPE_BINARY) + " " + arguments;
+  command += stderr_mode == Stderr::kSeparate ? " 2>" + quoted(errors_file) : " 2>&1";
+  CommandRun result = run_shell(command);
   if (stderr_mode == Stderr::kSeparate) {
     result.errors = slurp(errors_file);
     std::error_code ignored;

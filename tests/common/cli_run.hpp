@@ -17,6 +17,9 @@ struct CommandRun {
   std::string errors;  // stderr under Stderr::kSeparate
 };
 
+// Runs `command` with sh and captures its stdout (stderr as the command redirects it).
+CommandRun run_shell(const std::string& command);
+
 // `arguments` are shell words appended to the binary's path; quote paths with quoted().
 CommandRun run_clutterscope(const std::string& arguments, Stderr stderr_mode = Stderr::kSeparate);
 

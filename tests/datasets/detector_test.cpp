@@ -256,5 +256,26 @@ TEST(Detector, WritesBopDetectionResults) {
   std::filesystem::remove(path);
 }
 
+// A writer that does not finish (the run failed) removes the temporary file and the folders it
+// created, so `detect --out new/dets.json` leaves no empty folder behind.
+TEST(Detector, AnUnfinishedWriterLeavesNoFolderBehind) {
+  const auto root = std::filesystem::temp_directory_path() / "clutterscope_detector_unfinished";
+  std::filesystem::remove_all(root);
+  std::filesystem::create_directories(root);
+  {
+    DetectionsWriter writer(root / "new" / "deeper" / "dets.json");
+    writer.add(1, 0, {});
+    EXPECT_TRUE(std::filesystem::exists(root / "new" / "deeper"));
+  }
+  EXPECT_FALSE(std::filesystem::exists(root / "new"));
+  EXPECT_TRUE(std::filesystem::exists(root));  // existed before: kept
+  {
+    DetectionsWriter writer(root / "new" / "dets.json");
+    writer.finish();
+  }
+  EXPECT_TRUE(std::filesystem::exists(root / "new" / "dets.json"));
+  std::filesystem::remove_all(root);
+}
+
 }  // namespace
 }  // namespace clutterscope::datasets

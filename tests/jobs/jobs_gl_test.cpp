@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <clutterscope/jobs/estimate_job.hpp>
+#include <clutterscope/jobs/report_job.hpp>
 #include <clutterscope/jobs/visibility_job.hpp>
 #include <clutterscope/render/context.hpp>
 #include <filesystem>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -112,6 +114,36 @@ TEST_F(JobsGl, EstimateCancelledResumesToTheUninterruptedResult) {
   for (const std::string& name : tables) {
     EXPECT_EQ(resumed.table(name).text, whole.table(name).text) << name;
   }
+}
+
+// The report's steps bound by the library (what the Python module runs): each step reports its
+// progress under its name, a cancel stops the whole report, and the same call again resumes.
+TEST_F(JobsGl, ReportStepsRunUnderTheControlAndResumeAfterACancel) {
+  ReportJobOptions options;
+  options.dataset = dataset_into(fresh_dir("jobs_report"));
+  options.dataset.scenes = "0-1";
+  options.notebook = false;
+  ReportStepOptions steps;
+  steps.estimate.no_time = true;
+  std::vector<Progress> calls;
+  EXPECT_THROW(run_report(options, bind_report_steps(options, steps, cancel_after(1, &calls))),
+               Cancelled);
+  ASSERT_EQ(calls.size(), 1u);
+  EXPECT_EQ(calls[0].step, "estimate");  // the first step
+  EXPECT_FALSE(fs::exists(fs::path(options.dataset.out) / "summary.json"));
+
+  std::set<std::string> seen;
+  RunControl control;
+  control.progress = [&seen](const Progress& progress) { seen.insert(progress.step); };
+  const ReportRun run = run_report(options, bind_report_steps(options, steps, control));
+  EXPECT_EQ(run.exit_code, 0);
+  ASSERT_FALSE(run.steps.empty());
+  EXPECT_EQ(run.steps[0].command, "estimate");
+  EXPECT_EQ(run.steps[0].resumed, 1u);
+  EXPECT_EQ(run.steps[0].computed, 1u);
+  EXPECT_TRUE(seen.count("estimate"));
+  EXPECT_TRUE(seen.count("visibility"));
+  EXPECT_TRUE(fs::exists(run.files.summary_json));
 }
 
 TEST_F(JobsGl, TheCliEntryPointKeepsNothingInMemory) {

@@ -20,10 +20,10 @@ file(REMOVE_RECURSE "${WORK_DIR}")
 set(copy "${WORK_DIR}/src")
 file(MAKE_DIRECTORY "${copy}")
 # The configure needs the CMake files and the libraries' sources, not the tests (they are off),
-# the samples, the history or a build tree.
+# the samples, hidden folders (the history) or build trees.
 file(GLOB entries RELATIVE "${SOURCE_DIR}" "${SOURCE_DIR}/*")
 foreach(entry IN LISTS entries)
-  if(entry MATCHES "^(\\.git|tests)$" OR EXISTS "${SOURCE_DIR}/${entry}/CMakeCache.txt")
+  if(entry MATCHES "^(\\..*|tests|build.*)$" OR EXISTS "${SOURCE_DIR}/${entry}/CMakeCache.txt")
     continue()
   endif()
   file(COPY "${SOURCE_DIR}/${entry}" DESTINATION "${copy}" PATTERN "samples" EXCLUDE)

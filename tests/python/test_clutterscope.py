@@ -369,7 +369,7 @@ def test_module_imports_from_the_build_tree_and_an_install_prefix(tmp_path):
     assert built.returncode == 0, built.stderr
     prefix = tmp_path / "prefix"
     install = subprocess.run([os.environ["CLUTTERSCOPE_CMAKE_COMMAND"], "--install", str(BUILD),
-                              "--prefix", str(prefix), "--component", "python"],
+                              "--prefix", str(prefix), "--component", "runtime"],
                              capture_output=True, text=True, check=False)
     assert install.returncode == 0, install.stdout + install.stderr
     site = prefix / os.environ["CLUTTERSCOPE_PYTHON_INSTALL_DIR"]

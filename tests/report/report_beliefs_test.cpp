@@ -145,21 +145,24 @@ TEST_F(BeliefPlot, ProjectsTheSamplesOfTheShownIterationsBesideTheFinalEstimates
   }
   EXPECT_EQ(plot.svg.find("iteration 2"), std::string::npos);
   EXPECT_EQ(count(plot.svg, "<use href="), 4);
-  // (0.1, 0, 1) -> pixel (90, 60) -> (12 + 168.75, 62 + 112.5) in the first panel, and the same
-  // shifted by 312 and 624 in the second and third.
-  for (const char* x : {"180.75", "492.75", "804.75"}) {
-    EXPECT_NE(plot.svg.find(std::string("cx=\"") + x + "\" cy=\"174.50\" r=\"1.8\""),
-              std::string::npos)
-        << x;
+  // Two 480 px panels a row (scale 3 for the 160 px image; rows 394 px apart from y 62):
+  // (0.1, 0, 1) -> pixel (90, 60) -> (12 + 270, 62 + 180) in the first panel, shifted by 492 in
+  // the second, and by 394 down in the third (second row, first column).
+  for (const char* at : {"cx=\"282.00\" cy=\"242.00\"", "cx=\"774.00\" cy=\"242.00\"",
+                         "cx=\"282.00\" cy=\"636.00\""}) {
+    EXPECT_NE(plot.svg.find(std::string(at) + " r=\"1.8\""), std::string::npos) << at;
   }
   // Samples drawn: iteration 1: 3, iteration 3: 2 (gt 2 is outside), iteration 5: 2 (one of
   // gt 1 is behind the camera).
   EXPECT_EQ(count(plot.svg, "r=\"1.8\""), 3 + 2 + 2);
-  // Final panel (x from 948): gt 1 confident at pixel (90, 60), gt 2 uncertain at (60, 70).
-  EXPECT_NE(plot.svg.find("<circle cx=\"1116.75\" cy=\"174.50\" r=\"7\"/>"), std::string::npos);
-  EXPECT_NE(plot.svg.find("<circle cx=\"1060.50\" cy=\"193.25\" r=\"9\" stroke-dasharray"),
+  // Final panel (second row, x from 504): gt 1 confident at pixel (90, 60), gt 2 uncertain at
+  // (60, 70), each with its gt id beside it.
+  EXPECT_NE(plot.svg.find("<circle cx=\"774.00\" cy=\"636.00\" r=\"7\"/>"), std::string::npos);
+  EXPECT_NE(plot.svg.find("<circle cx=\"684.00\" cy=\"666.00\" r=\"9\" stroke-dasharray"),
             std::string::npos)
       << plot.svg;
+  EXPECT_NE(plot.svg.find("paint-order=\"stroke\">1</text>"), std::string::npos);
+  EXPECT_NE(plot.svg.find("paint-order=\"stroke\">2</text>"), std::string::npos);
   // Ground-truth diamonds for the two estimated objects only (not the tray), plus the legend's.
   EXPECT_EQ(count(plot.svg, "<polygon"), 2 * (2 + 1));
   // Legend: the estimated objects in their colours by index in the image, not the tray.

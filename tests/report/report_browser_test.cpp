@@ -89,7 +89,18 @@ TEST(ReportBrowser, ChromiumLoadsReportWithoutErrorsAndEveryPlotHasASize) {
   const EvaluationResults evaluation = testing::known_evaluation();
   const std::vector<NamedPlot> evaluation_figures = evaluation_plots(evaluation);
   plots.insert(plots.end(), evaluation_figures.begin(), evaluation_figures.end());
-  const ReportFiles files = write_report(dir / "report", rows, analysis, plots, {}, &evaluation);
+  // A run record as long as report's own (dataset, every step's options): the header must wrap
+  // it to the page, not write one line of JSON thousands of pixels wide.
+  nlohmann::ordered_json run;
+  run["command"] = "report";
+  run["dataset"] = {{"path", "/a/rather/long/path/to/a/bop/dataset/" + std::string(60, 'x')},
+                    {"split", "test"},
+                    {"scenes", "1,2,5-7"}};
+  for (const char* step : {"visibility_options", "estimate_options"}) {
+    for (int k = 0; k < 30; ++k) run[step]["option_number_" + std::to_string(k)] = 0.125 * k;
+    run[step]["nested"] = {{"a_long_list", std::vector<int>(60, 7)}};
+  }
+  const ReportFiles files = write_report(dir / "report", rows, analysis, plots, run, &evaluation);
 
   // 1. Load report.html as written: screenshot, and no console output or failed load.
   const std::filesystem::path screenshot = dir / "report_screenshot.png";
@@ -123,7 +134,8 @@ TEST(ReportBrowser, ChromiumLoadsReportWithoutErrorsAndEveryPlotHasASize) {
       "document.querySelectorAll('figure.plot').forEach(function(f){var s=f.querySelector("
       "'svg');var r=s?s.getBoundingClientRect():{width:0,height:0};out.push(f.id+' '+r.width+"
       "' '+r.height);});performance.getEntriesByType('resource').forEach(function(e){out.push("
-      "'resource '+e.name);});var pre=document.createElement('pre');pre.id='plot-sizes';"
+      "'resource '+e.name);});out.push('page '+document.documentElement.scrollWidth+' '+"
+      "window.innerWidth);var pre=document.createElement('pre');pre.id='plot-sizes';"
       "pre.textContent=out.join('\\n');document.body.appendChild(pre);});</script>\n";
   html.insert(html.find("</head>"), probe);
   const std::filesystem::path measured = dir / "report" / "measure.html";
@@ -149,16 +161,28 @@ TEST(ReportBrowser, ChromiumLoadsReportWithoutErrorsAndEveryPlotHasASize) {
   const size_t end = dom.find("</pre>", begin);
   std::istringstream sizes(dom.substr(begin + 21, end - begin - 21));
   std::map<std::string, std::pair<double, double>> measured_sizes;
+  bool page_measured = false;
   for (std::string line; std::getline(sizes, line);) {
     std::istringstream fields(line);
     std::string id;
     fields >> id;
+    if (id == "page") {
+      // The page scrolls vertically only: nothing (header, table, figure) is wider than the
+      // 1280 px window.
+      double scroll_width = 0, viewport_width = 0;
+      fields >> scroll_width >> viewport_width;
+      EXPECT_GT(viewport_width, 0.0) << line;
+      EXPECT_LE(scroll_width, viewport_width) << line;
+      page_measured = true;
+      continue;
+    }
     ASSERT_NE(id, "resource") << "the report fetched " << line;
     ASSERT_NE(id, "failed") << "an element of the report failed to load: " << line;
     double width = 0, height = 0;
     fields >> width >> height;
     measured_sizes[id] = {width, height};
   }
+  EXPECT_TRUE(page_measured);
   ASSERT_EQ(measured_sizes.size(), plots.size());
   for (const NamedPlot& plot : plots) {
     const auto found = measured_sizes.find("plot-" + plot.name);

@@ -4,6 +4,7 @@
 #include <clutterscope/report/plots.hpp>
 #include <clutterscope/report/svg.hpp>
 #include <opencv2/core.hpp>
+#include <regex>
 
 #include "report_test_tables.hpp"
 
@@ -26,6 +27,19 @@ class ReportSvg : public ::testing::Test {
       ++n;
     }
     return n;
+  }
+  // The <svg> width, and each left-aligned text that would run past it at 7.2 px a character
+  // (DejaVu Sans 12 px averages less), i.e. text the SVG's edge cuts off.
+  static std::vector<std::string> texts_past_the_edge(const std::string& svg) {
+    const double width = std::stod(svg.substr(svg.find("width=\"") + 7));
+    std::vector<std::string> clipped;
+    const std::regex text(
+        R"re(<text x="([0-9.]+)"[^>]*text-anchor="start"[^>]*>(<title>[^<]*</title>)?([^<]*)</text>)re");
+    for (std::sregex_iterator it(svg.begin(), svg.end(), text), end; it != end; ++it) {
+      const std::string content = (*it)[3];
+      if (std::stod((*it)[1]) + 7.2 * content.size() > width) clipped.push_back(content);
+    }
+    return clipped;
   }
   std::filesystem::path dir_;
 };
@@ -53,6 +67,52 @@ TEST_F(ReportSvg, VarianceScatterHasLogAxisUnitsColourBarAndThreshold) {
   EXPECT_NE(svg.find("position error (cm)"), std::string::npos);
   EXPECT_NE(svg.find("threshold 0.25 cm\u00b2"), std::string::npos);
   EXPECT_NE(svg.find("stroke-dasharray"), std::string::npos);
+}
+
+// Values above the colour scale's maximum take its colour: the bar's top says "\u2265 3".
+TEST_F(ReportSvg, ColourBarSaysItSaturatesAtItsMaximum) {
+  std::vector<ObjectRow> rows;
+  for (int i = 0; i < 4; ++i) rows.push_back(testing::object(0.5, 0.1, 2.0 * i, 0, i));
+  const std::string svg = variance_visibility_plot(rows, 0.25, 1.0);  // scale 0 to 3 cm
+  EXPECT_TRUE(well_formed("saturating", svg));
+  EXPECT_NE(svg.find(">\u2265 3.0<"), std::string::npos) << svg;
+  EXPECT_EQ(count(svg, "\u2265"), 1);
+}
+
+// A legend entry longer than the side panel wraps instead of running off the chart.
+TEST_F(ReportSvg, CalibrationLegendFitsTheChart) {
+  Coverage all;
+  all.count = 12345;
+  for (auto& level : all.observed) level = Statistic::of(0.5);
+  const std::string svg = calibration_plot(all, all, all);
+  EXPECT_TRUE(well_formed("calibration_legend", svg));
+  EXPECT_TRUE(texts_past_the_edge(svg).empty())
+      << ::testing::PrintToString(texts_past_the_edge(svg));
+  EXPECT_NE(svg.find(">honest (observed =<"), std::string::npos);
+  EXPECT_NE(svg.find(">nominal)<"), std::string::npos);
+  EXPECT_EQ(count(svg, "12345"), 3);  // each n, on a line of its own or not
+}
+
+// In rendered mode visib_fract leaves out the part outside the image: the bar is the column,
+// and its text says how little of the object is in the image (bop19: visib_fract already
+// counts that part as hidden, nothing is added).
+TEST_F(ReportSvg, VisibilityBarsSayWhenMostOfAnObjectIsOutsideTheImage) {
+  ObjectRow soup = testing::object(1.0, 0.1, 1.0, 0, 0);
+  soup.px_count_all = 17156;  // ycbv_real scene 3, image 138, gt 0 (README)
+  soup.px_count_valid = 3138;
+  soup.px_count_visib = 3138;
+  ObjectRow bop19 = soup;
+  bop19.gt_id = 1;
+  bop19.visib_fract = 3138.0 / 17156;
+  const ObjectRow whole = testing::object(0.6, 0.1, 1.0, 0, 2);
+  const std::string svg = image_visibility_plot("bars", {soup, bop19, whole}, 0.5);
+  EXPECT_TRUE(well_formed("truncated_bars", svg));
+  EXPECT_NE(svg.find(">100% (only 18% in the image)<"), std::string::npos) << svg;
+  EXPECT_NE(svg.find(">18%<"), std::string::npos) << svg;
+  EXPECT_NE(svg.find(">60%<"), std::string::npos) << svg;
+  EXPECT_EQ(count(svg, "in the image"), 1);
+  EXPECT_TRUE(texts_past_the_edge(svg).empty())
+      << ::testing::PrintToString(texts_past_the_edge(svg));
 }
 
 TEST_F(ReportSvg, LogAxisPlacesDecadesEvenly) {
@@ -153,9 +213,10 @@ TEST_F(ReportSvg, ImagePanelsEmbedThePngAndDrawEachObject) {
                               {{10, 10}, {20, 30}, {500, 5}},
                               std::array<double, 2>{15, 20},
                               true,
-                              std::nullopt};
-  svg::ProjectedObject tea{"tea",       svg::category_colour(1), {{70, 50}}, std::nullopt, true,
-                           std::nullopt};
+                              std::nullopt,
+                              ""};
+  svg::ProjectedObject tea{
+      "tea", svg::category_colour(1), {{70, 50}}, std::nullopt, true, std::nullopt, ""};
   const std::string svg =
       svg::image_panels("Beliefs", background,
                         {{"initial beliefs", {coffee, tea}}, {"final estimates", {coffee}}}, 160);
@@ -184,14 +245,64 @@ TEST_F(ReportSvg, ImagePanelsEmbedThePngAndDrawEachObject) {
   EXPECT_NE(id_of(svg), id_of(other));
 }
 
+// simulate's round picture: each panel lists its own objects under it (one merged legend
+// alternated between the two), and the tags (pick order) are drawn beside the markers, apart
+// even when the markers overlap.
+TEST_F(ReportSvg, ImagePanelsWithOwnLegendsAndTags) {
+  const svg::BackgroundImage background =
+      svg::BackgroundImage::from_raster(cv::Mat(60, 80, CV_8UC1, cv::Scalar(90)));
+  svg::ProjectedObject a{
+      "a", svg::category_colour(0), {}, std::array<double, 2>{20, 20}, true, std::nullopt, ""};
+  svg::ProjectedObject b{
+      "b", svg::category_colour(1), {}, std::array<double, 2>{21, 21}, true, std::nullopt, ""};
+  svg::ProjectedObject a_picked = a, b_picked = b;
+  a_picked.label = "a: picked #1";
+  a_picked.tag = "#1";
+  b_picked.label = "b: picked #2";
+  b_picked.tag = "#2";
+  const std::string svg = svg::image_panels(
+      "Round", background, {{"estimates", {a, b}}, {"picks", {a_picked, b_picked}}},
+      svg::PanelLayout{200, 2, true});
+  EXPECT_TRUE(well_formed("own_legends", svg));
+  // Panel 1 (x from 12) lists a and b, panel 2 (x from 224) its picks, each under itself.
+  const auto x_of = [&](const std::string& label) {
+    const size_t at = svg.find(">" + label + "<");
+    EXPECT_NE(at, std::string::npos) << label;
+    const size_t x = svg.rfind("<text x=\"", at);
+    return std::stod(svg.substr(x + 9));
+  };
+  EXPECT_LT(x_of("a"), 212);
+  EXPECT_LT(x_of("b"), 212);
+  EXPECT_GT(x_of("a: picked #1"), 224);
+  EXPECT_GT(x_of("b: picked #2"), 224);
+  // The tags, each once, at different places although the estimates are 1 px apart.
+  EXPECT_EQ(count(svg, ">#1<"), 1);
+  EXPECT_EQ(count(svg, ">#2<"), 1);
+  const auto tag_position = [&](const std::string& tag) {
+    const size_t at = svg.find(">" + tag + "<");
+    const size_t x = svg.rfind("<text x=\"", at);
+    return svg.substr(x, svg.find(" font-size", x) - x);
+  };
+  EXPECT_NE(tag_position("#1"), tag_position("#2"));
+
+  // Two panels a row: four panels make two rows, so the SVG is two panels wide.
+  const std::string grid =
+      svg::image_panels("Grid", background, {{"1", {a}}, {"2", {a}}, {"3", {a}}, {"4", {a}}},
+                        svg::PanelLayout{200, 2, false});
+  EXPECT_TRUE(well_formed("grid", grid));
+  EXPECT_NE(grid.find("width=\"436\""), std::string::npos) << grid.substr(0, 300);
+  EXPECT_EQ(count(grid, "<use href=\"#bg-"), 4);
+}
+
 TEST_F(ReportSvg, ImagePanelsMarkUncertainEstimatesAndGroundTruth) {
   const svg::BackgroundImage background =
       svg::BackgroundImage::from_raster(cv::Mat(60, 80, CV_8UC1, cv::Scalar(90)));
-  const svg::ProjectedObject sure{"sure", svg::category_colour(0),
-                                  {},     std::array<double, 2>{20, 20},
-                                  true,   std::array<double, 2>{22, 21}};
+  const svg::ProjectedObject sure{
+      "sure", svg::category_colour(0),       {}, std::array<double, 2>{20, 20},
+      true,   std::array<double, 2>{22, 21}, ""};
   const svg::ProjectedObject unsure{
-      "unsure", svg::category_colour(1), {}, std::array<double, 2>{60, 40}, false, std::nullopt};
+      "unsure", svg::category_colour(1), {}, std::array<double, 2>{60, 40}, false, std::nullopt,
+      ""};
   const std::string svg =
       svg::image_panels("Estimates", background, {{"final", {sure, unsure}}}, 80);
   EXPECT_TRUE(well_formed("markers", svg));

@@ -2,6 +2,7 @@
 #include <atomic>
 #include <chrono>
 #include <clutterscope/batch/batch.hpp>
+#include <clutterscope/batch/build_info.hpp>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/input_digest.hpp>
 #include <clutterscope/batch/output_folder.hpp>
@@ -181,8 +182,8 @@ void write_run_json(const fs::path& out_dir, const std::string& command,
       {"images_per_second", result.computed > 0 && result.seconds > 0
                                 ? json_rounded(result.computed / result.seconds, 3)
                                 : nullptr},
-      {"peak_memory_mib", peak_memory_mib()},
-      {"tool_version", CLUTTERSCOPE_VERSION}};
+      {"peak_memory_mib", peak_memory_mib()}};
+  run.update(build_record());  // tool_version and the git commit
   write_json_atomically(out_dir / "run.json", run);
 }
 

@@ -68,6 +68,21 @@ std::string printf_general(double value, int significant) {
   return to_chars_or_throw(value, std::chars_format::general, std::max(significant, 1));
 }
 
+std::string count_text(long long count, const std::string& singular, const std::string& plural) {
+  return std::to_string(count) + " " + (count == 1 || count == -1 ? singular : plural);
+}
+
+std::string count_text(long long count, const std::string& singular) {
+  return count_text(count, singular, singular + "s");
+}
+
+std::string seconds_text(double seconds) {
+  // Three significant digits below 100 s; whole seconds above (no exponent for long runs).
+  const std::string number =
+      std::abs(seconds) < 100 ? printf_general(seconds, 3) : printf_fixed(seconds, 0);
+  return number + " s";
+}
+
 std::string csv_escape(std::string_view text) {
   if (text.find_first_of(",\"\n\r") == std::string_view::npos) return std::string(text);
   std::string quoted = "\"";

@@ -176,6 +176,11 @@ void claim_output_file(const fs::path& file, const std::string& option, const st
   if (fs::is_directory(path, error)) {
     throw UsageError(file.string() + " is a folder; " + option + " names the output file");
   }
+  if (file.filename().empty()) {  // "DIR/": a folder that does not exist yet
+    throw UsageError(option + " " + file.string() + " ends with '/', which names a folder; " +
+                     option + " names the output file (e.g. " +
+                     (file / (command + ".json")).string() + ")");
+  }
   refuse_dataset_content(file, option);
   check_folders_above(path, file);
   if (fs::exists(path, error) && !written_by_command(path)) {

@@ -79,10 +79,12 @@ void Progress::finish(std::size_t failed) {
   if (drawn_) std::cerr << "\r\x1b[K";
   const double elapsed = elapsed_seconds();
   const double rate = elapsed > 0 ? computed_ / elapsed : 0.0;
-  std::cerr << label_ << ": " << already_done_ + computed_ << "/" << total_ << " " << unit_ << " ("
-            << computed_ - failed_ << " computed, " << already_done_ << " resumed, " << failed
-            << " failed) in " << format_fixed(elapsed, 1) << " s, " << format_fixed(rate, 1) << " "
-            << unit_ << "/s\n"
+  // "1/1 image", not "1/1 images"; the units are plural nouns ("images", "scenes").
+  const bool one = total_ == 1 && !unit_.empty() && unit_.back() == 's';
+  std::cerr << label_ << ": " << already_done_ + computed_ << "/" << total_ << " "
+            << (one ? unit_.substr(0, unit_.size() - 1) : unit_) << " (" << computed_ - failed_
+            << " computed, " << already_done_ << " resumed, " << failed << " failed) in "
+            << seconds_text(elapsed) << ", " << format_fixed(rate, 1) << " " << unit_ << "/s\n"
             << std::flush;
 }
 

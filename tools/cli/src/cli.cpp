@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cctype>
 #include <clutterscope/batch/batch.hpp>
+#include <clutterscope/batch/build_info.hpp>
 #include <clutterscope/cli/cli.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/render/context.hpp>
@@ -147,7 +148,7 @@ void describe_app(CLI::App& app) {
   app.description(
       "clutterscope: visibility and pose-belief analysis of cluttered scenes (BOP datasets).\n"
       "Run `clutterscope COMMAND --help` for a command's options.");
-  app.set_version_flag("--version", std::string("clutterscope ") + CLUTTERSCOPE_VERSION);
+  app.set_version_flag("--version", batch::version_text());
   app.require_subcommand(1);
   app.footer(exit_codes_footer(""));
   app.get_formatter()->column_width(28);
@@ -195,6 +196,29 @@ void print_renderer(const CLI::App& app) {
   std::cerr << command->get_name() << ": GL renderer " << renderer << "\n";
 }
 
+// The first word that names no command where one is expected ("frobnicate", "bench nope"):
+// CLI11 would only say "A subcommand is required". Empty when the words name commands.
+std::string unknown_command_message(const CLI::App& app, int argc, char** argv) {
+  const CLI::App* group = &app;
+  std::string path = "clutterscope";
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    const std::vector<const CLI::App*> commands = group->get_subcommands({});
+    if (commands.empty() || word.empty() || word[0] == '-') return "";
+    const auto found = std::find_if(commands.begin(), commands.end(), [&](const CLI::App* command) {
+      return command->check_name(word);
+    });
+    if (found == commands.end()) {
+      std::string message = "unknown command '" + word + "' for " + path + "; the commands are:";
+      for (const CLI::App* command : commands) message += " " + command->get_name();
+      return message + " (`" + path + " --help` describes them)";
+    }
+    group = *found;
+    path += " " + word;
+  }
+  return "";
+}
+
 }  // namespace
 
 int run_cli(int argc, char** argv) {
@@ -209,6 +233,11 @@ int run_cli(int argc, char** argv) {
     const CLI::App& app;
     ~PrintRenderer() { print_renderer(app); }
   } print_renderer_on_exit{app};
+  const std::string unknown = unknown_command_message(app, argc, argv);
+  if (!unknown.empty()) {
+    std::cerr << "error: " << unknown << "\n";
+    return kExitUsage;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

@@ -24,10 +24,9 @@ namespace clutterscope::cli {
 namespace {
 
 struct DetectArguments {
-  std::string dataset;
+  DatasetOptions
+      dataset;  // DATASET, --split, --split-type, --models-dir, --targets, --scenes, --images
   std::string out;
-  std::string split = "test";
-  std::string scenes;
   std::uint64_t seed = 0;
   bool quiet = false;
   datasets::DetectorOptions detector;
@@ -38,13 +37,9 @@ void run_detect(const DetectArguments& arguments) {
   if (!arguments.detector.IsValid(&why)) throw batch::UsageError(why);
   batch::claim_output_file(arguments.out, "--out", "detect",
                            datasets::written_by_detections_writer);
-  const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
-  datasets::DatasetSelection selection;
-  selection.splits = {arguments.split};
-  selection.scene_ids = batch::select_ids(
-      batch::parse_id_selection(arguments.scenes, "--scenes"), dataset.scene_ids(arguments.split),
-      "scene", std::filesystem::path(arguments.dataset) / arguments.split);
-  const std::vector<datasets::ImageKey> keys = dataset.list_images(selection);
+  const datasets::BopDataset dataset = open_dataset(arguments.dataset);
+  const std::vector<datasets::ImageKey> keys =
+      batch::list_selected_images(dataset, arguments.dataset);
   std::vector<int> category_ids;
   const datasets::GraphInferenceOptions graph_options;
   for (const auto& model : dataset.models()) {
@@ -110,13 +105,11 @@ void add_detect_command(CLI::App& app, int* exit_code) {
       "score falling with visibility and optional duplicates and false positives; a completely "
       "hidden instance gets its amodal box (the silhouette it would have unoccluded) with a "
       "low score. Tray and table instances (fixed) are not detected.");
-  command->add_option("DATASET", arguments->dataset, "BOP dataset folder")->required();
+  add_dataset_options(*command, &arguments->dataset, kDataset | kScenes | kImages);
   command
       ->add_option("--out", arguments->out,
                    "output JSON file (an existing file is replaced only when detect wrote it)")
       ->required();
-  command->add_option("--split", arguments->split, "split folder")->capture_default_str();
-  command->add_option("--scenes", arguments->scenes, "scene ids, e.g. 1,2,5-7 (default all)");
   command->add_option("--seed", arguments->seed, "random seed")->capture_default_str();
   command->add_flag("--quiet", arguments->quiet, "no progress output");
   add_detector_options(*command, &arguments->detector);

@@ -2,6 +2,7 @@
 // graphs, camera world poses, synthetic sensor depth and synthetic detections.
 
 #include <clutterscope/batch/batch.hpp>
+#include <clutterscope/batch/formats.hpp>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -284,11 +285,14 @@ void add_generate_command(CLI::App& app, int* exit_code) {
     parse_object_range(arguments->objects, &run.layout);
     const GenerateSummary summary = generate_dataset(run);
     if (!run.quiet) {
-      std::cerr << "generate: " << summary.scenes << " scenes, " << summary.images << " images, "
-                << summary.objects << " object views (" << summary.fully_visible
+      using batch::count_text;
+      std::cerr << "generate: " << count_text(summary.scenes, "scene") << ", "
+                << count_text(summary.images, "image") << ", "
+                << count_text(summary.objects, "object view") << " (" << summary.fully_visible
                 << " fully visible, " << summary.partly_visible << " partly, " << summary.hidden
-                << " hidden), deepest stack " << summary.deepest_stack << ", " << summary.detections
-                << " detections in " << summary.seconds << " s; wrote " << run.out.string() << "\n";
+                << " hidden), deepest stack " << summary.deepest_stack << ", "
+                << count_text(summary.detections, "detection") << " in "
+                << batch::seconds_text(summary.seconds) << "; wrote " << run.out.string() << "\n";
     }
     *exit_code = 0;
   });

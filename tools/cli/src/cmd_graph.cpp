@@ -2,6 +2,7 @@
 // (the paper's a-priori scene graph) for datasets that have none, and print or write them.
 
 #include <clutterscope/batch/batch.hpp>
+#include <clutterscope/batch/formats.hpp>
 #include <clutterscope/cli/dataset_options.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/files.hpp>
@@ -17,9 +18,7 @@ namespace clutterscope::cli {
 namespace {
 
 struct GraphArguments {
-  std::string dataset;
-  std::string split = "test";
-  std::string scenes;
+  DatasetOptions dataset;  // DATASET, --split, --split-type, --models-dir, --targets, --scenes
   bool write = false;
   double contact_tolerance_mm = 5.0;
   double min_overlap_cm2 = 1.0;
@@ -33,16 +32,21 @@ void run_graph(const GraphArguments& arguments) {
   options.near_distance_m = arguments.near_distance_mm / 1000.0;
   std::string why;
   if (!options.IsValid(&why)) throw batch::UsageError(why);
-  const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
+  if (arguments.write && !arguments.dataset.targets.empty()) {
+    // A scene's scene_graph.json holds every image of the scene, not the targets' only.
+    throw batch::UsageError("--write writes whole scenes' scene_graph.json: not with --targets");
+  }
+  const datasets::BopDataset dataset = open_dataset(arguments.dataset);
+  const std::string split = split_folder(arguments.dataset);
   const std::vector<int> scene_ids = batch::select_ids(
-      batch::parse_id_selection(arguments.scenes, "--scenes"), dataset.scene_ids(arguments.split),
-      "scene", std::filesystem::path(arguments.dataset) / arguments.split);
+      batch::parse_id_selection(arguments.dataset.scenes, "--scenes"), dataset.scene_ids(split),
+      "scene", std::filesystem::path(arguments.dataset.dataset) / split);
   std::map<datasets::GravitySource, int> sources;
   nlohmann::ordered_json printed;
   std::map<std::filesystem::path, std::string> to_write;  // written once all are inferred
   for (const int scene_id : scene_ids) {
     datasets::DatasetSelection selection;
-    selection.splits = {arguments.split};
+    selection.splits = {split};
     selection.scene_ids = {scene_id};
     std::map<int, datasets::SceneGraph> graphs;
     for (const auto& key : dataset.list_images(selection)) {
@@ -56,7 +60,7 @@ void run_graph(const GraphArguments& arguments) {
     const std::string json = datasets::scene_graphs_json(graphs);
     const std::string folder = datasets::six_digits(scene_id);
     if (arguments.write) {
-      to_write[std::filesystem::path(arguments.dataset) / arguments.split / folder /
+      to_write[std::filesystem::path(arguments.dataset.dataset) / split / folder /
                "scene_graph.json"] = json;
     } else {
       printed[std::to_string(scene_id)] = nlohmann::json::parse(json);
@@ -73,9 +77,11 @@ void run_graph(const GraphArguments& arguments) {
   }
   for (const auto& [path, json] : to_write) datasets::write_file_atomically(path, json);
   if (!arguments.write) std::cout << printed.dump(1) << "\n";
-  std::cerr << "graph: " << scene_ids.size() << " scenes; gravity frame from";
+  std::cerr << "graph: " << batch::count_text(static_cast<long long>(scene_ids.size()), "scene")
+            << "; gravity frame from";
   for (const auto& [source, count] : sources) {
-    std::cerr << " " << datasets::to_string(source) << " (" << count << " images)";
+    std::cerr << " " << datasets::to_string(source) << " (" << batch::count_text(count, "image")
+              << ")";
   }
   std::cerr << (arguments.write ? "; wrote scene_graph.json per scene\n" : "\n");
 }
@@ -91,9 +97,7 @@ void add_graph_command(CLI::App& app, int* exit_code) {
       "overlap, the lowest objects on the tray/table (fixed), non_contact for nearby pairs. "
       "Gravity from the camera world pose (cam_R_w2c), else the fixed support's pose, else an "
       "upright camera. Prints JSON {scene_id: scene_graph.json contents}, or --write.");
-  command->add_option("DATASET", arguments->dataset, "BOP dataset folder")->required();
-  command->add_option("--split", arguments->split, "split folder")->capture_default_str();
-  command->add_option("--scenes", arguments->scenes, "scene ids, e.g. 1,2,5-7 (default all)");
+  add_dataset_options(*command, &arguments->dataset, kDataset | kScenes);
   command->add_flag(
       "--write", arguments->write,
       "write SPLIT/SCENE/scene_graph.json (an existing one that differs is not replaced)");

@@ -2,7 +2,9 @@
 // headless with EGL, plus a colourised preview.
 
 #include <algorithm>
+#include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/output_folder.hpp>
+#include <clutterscope/cli/dataset_options.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/render/context.hpp>
@@ -26,8 +28,7 @@ namespace fs = std::filesystem;
 namespace {
 
 struct RenderArguments {
-  std::string dataset;
-  std::string split = "test";
+  DatasetOptions dataset;  // DATASET, --split, --split-type, --models-dir, --targets
   int scene = -1;
   int image = -1;
   std::string out;
@@ -87,17 +88,18 @@ cv::Mat preview(const render::DepthLabelImage& image) {
 
 void run_render(const RenderArguments& arguments) {
   batch::claim_output_folder(arguments.out, "render");
-  const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
+  const datasets::BopDataset dataset = open_dataset(arguments.dataset);
   datasets::DatasetSelection selection;
-  selection.splits = {arguments.split};
+  selection.splits = {split_folder(arguments.dataset)};
   selection.scene_ids = {arguments.scene};
   selection.image_ids = {arguments.image};
   const std::vector<datasets::ImageKey> keys = dataset.list_images(selection);
   if (keys.size() != 1) {
-    throw datasets::DatasetError(dataset.root(),
-                                 datasets::location(arguments.scene, arguments.image) +
-                                     "expected one image in split " + arguments.split + ", found " +
-                                     std::to_string(keys.size()));
+    throw datasets::DatasetError(
+        dataset.root(), datasets::location(arguments.scene, arguments.image) +
+                            "expected one image in split " + selection.splits.front() +
+                            (arguments.dataset.targets.empty() ? "" : " and the --targets") +
+                            ", found " + std::to_string(keys.size()));
   }
   const datasets::SceneView view = dataset.load(keys.front());
 
@@ -123,12 +125,14 @@ void run_render(const RenderArguments& arguments) {
   write_png(out / "preview.png", preview(image));
 
   std::cout << "split " << view.key.split << ", scene " << view.key.scene_id << ", image "
-            << view.key.im_id << ": " << instances.size() << " objects, " << view.camera.width
-            << "x" << view.camera.height << ", pixel centres "
+            << view.key.im_id << ": "
+            << batch::count_text(static_cast<long long>(instances.size()), "object") << ", "
+            << view.camera.width << "x" << view.camera.height << ", pixel centres "
             << (center == render::PixelCenter::kInteger ? "integer" : "half") << ", "
-            << cv::countNonZero(image.labels) << " object pixels\n";
+            << batch::count_text(cv::countNonZero(image.labels), "object pixel") << "\n";
   if (clipped > 0) {
-    std::cout << "warning: " << clipped << " pixels deeper than 65.535 m clipped in depth.png\n";
+    std::cout << "warning: " << batch::count_text(clipped, "pixel")
+              << " deeper than 65.535 m clipped in depth.png\n";
   }
   std::cout << "wrote " << (out / "depth.png").string() << ", " << (out / "labels.png").string()
             << ", " << (out / "preview.png").string() << "\n";
@@ -144,11 +148,7 @@ void add_render_command(CLI::App& app, int* exit_code) {
       "BOP depth with depth_scale 1, 0 = no surface), labels.png (16-bit, 0 = background, k+1 = "
       "GT instance k of scene_gt.json) and preview.png (depth colourised near = red to far = "
       "blue, white instance outlines). Prints the GL renderer in use.");
-  command->add_option("DATASET", arguments->dataset, "BOP dataset folder")
-      ->required()
-      ->check(CLI::ExistingDirectory);
-  command->add_option("--split", arguments->split, "split folder (test, train_pbr, ...)")
-      ->capture_default_str();
+  add_dataset_options(*command, &arguments->dataset, kDataset);
   command->add_option("--scene", arguments->scene, "scene id")
       ->required()
       ->check(CLI::NonNegativeNumber);

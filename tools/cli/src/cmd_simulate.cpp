@@ -2,6 +2,8 @@
 // (jobs/simulate_run.hpp); prints each run's outcome and the comparison table.
 
 #include <clutterscope/batch/batch.hpp>
+#include <clutterscope/batch/formats.hpp>
+#include <clutterscope/cli/dataset_options.hpp>
 #include <clutterscope/jobs/simulate_run.hpp>
 #include <clutterscope/scene_estimation/scene_estimate.hpp>
 #include <cmath>
@@ -22,6 +24,7 @@ namespace {
 // The run's options, with --compare-thresholds as given ("T1,T2,...").
 struct Arguments {
   jobs::SimulateOptions options;
+  DatasetOptions dataset;  // DATASET, --split, --split-type, --models-dir, --targets
   std::string compare;
   bool quiet = false;
 };
@@ -50,10 +53,14 @@ std::vector<double> parse_thresholds(const std::string& text) {
 std::string describe(const simulation::UnloadingResult& result, double threshold,
                      const std::vector<std::string>& labels) {
   std::ostringstream out;
+  using batch::count_text;
+  const auto count = [](std::size_t n, const char* noun) {
+    return count_text(static_cast<long long>(n), noun);
+  };
   out << "threshold " << jobs::threshold_text(threshold)
-      << " cm^2: " << simulation::to_string(result.stop) << " after " << result.rounds.size()
-      << " round(s), " << result.picks << " pick(s), " << result.failed_picks << " failed, "
-      << result.left.size() << " object(s) left\n";
+      << " cm^2: " << simulation::to_string(result.stop) << " after "
+      << count(result.rounds.size(), "round") << ", " << count_text(result.picks, "pick") << ", "
+      << result.failed_picks << " failed, " << count(result.left.size(), "object") << " left\n";
   for (const simulation::RoundRecord& record : result.rounds) {
     out << "  round " << record.round << ": " << record.objects.size() << " on the tray, "
         << record.picks << " picked, " << record.failed_picks << " failed\n";
@@ -66,6 +73,11 @@ std::string describe(const simulation::UnloadingResult& result, double threshold
 
 void run_simulate(const Arguments& arguments) {
   jobs::SimulateOptions options = arguments.options;
+  options.dataset = arguments.dataset.dataset;
+  options.split = arguments.dataset.split;
+  options.split_type = arguments.dataset.split_type;
+  options.models_dir = arguments.dataset.models_dir;
+  options.targets = arguments.dataset.targets;
   std::string why;
   if (!options.IsValid(&why)) throw batch::UsageError(why);
   if (!arguments.compare.empty()) options.compare_thresholds = parse_thresholds(arguments.compare);
@@ -90,8 +102,7 @@ void add_simulate_command(CLI::App& app, int* exit_code) {
       "when the estimate is off by more than the grasp tolerance. Writes rounds.csv, "
       "summary.json and rounds/round_NN.svg (with --compare-thresholds: one such folder per "
       "threshold and compare.csv).");
-  command->add_option("DATASET", arguments->options.dataset, "BOP dataset folder")->required();
-  command->add_option("--split", arguments->options.split, "split folder")->capture_default_str();
+  add_dataset_options(*command, &arguments->dataset, kDataset);
   command->add_option("--scene", arguments->options.scene, "scene id")->required();
   command->add_option("--image", arguments->options.image, "image id within the scene")->required();
   command->add_option("--out", arguments->options.out, "output folder")->required();

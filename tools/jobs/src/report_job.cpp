@@ -354,8 +354,9 @@ ReportRun shard_run(const ReportJobOptions& options, ReportRun run,
   const fs::path dir = options.dataset.out;
   run.shard_only = true;
   run.console_summary =
-      "shard " + options.dataset.shard + " done (" + std::to_string(run.steps.front().computed) +
-      " images computed, " + std::to_string(run.steps.front().resumed) +
+      "shard " + options.dataset.shard + " done (" +
+      batch::count_text(static_cast<long long>(run.steps.front().computed), "image") +
+      " computed, " + std::to_string(run.steps.front().resumed) +
       " reused); when every shard has run, run the same command without --shard into " +
       dir.string() +
       " (shards run into other folders first: clutterscope merge SHARD_DIR... --out " +

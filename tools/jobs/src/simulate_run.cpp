@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <clutterscope/batch/batch.hpp>
+#include <clutterscope/batch/dataset_selection.hpp>
 #include <clutterscope/batch/formats.hpp>
 #include <clutterscope/batch/output_folder.hpp>
 #include <clutterscope/datasets/bop.hpp>
@@ -213,18 +214,24 @@ class Simulation {
       }
       if (object.outcome == Outcome::kPicked) {
         drawn.label = label + ": picked #" + std::to_string(object.pick_order + 1);
+        drawn.tag = "#" + std::to_string(object.pick_order + 1);  // the pick order, on the image
         panels[1].objects.push_back(drawn);
       } else if (object.outcome == Outcome::kFailedPick) {
         drawn.label = label + ": FAILED, off by " +
                       batch::format_general(object.perception.error_cm, 3) + " cm";
+        drawn.tag = "#" + std::to_string(object.pick_order + 1) + " failed";
         panels[1].objects.push_back(drawn);
       }
     }
-    const std::string title = "round " + std::to_string(record.round) + ": " +
-                              std::to_string(record.objects.size()) + " objects on the tray, " +
-                              std::to_string(record.picks) + " picked, " +
-                              std::to_string(record.failed_picks) + " failed";
-    return svg::image_panels(title, svg::BackgroundImage::from_raster(view.shaded), panels, 480);
+    const std::string title =
+        "round " + std::to_string(record.round) + ": " +
+        batch::count_text(static_cast<long long>(record.objects.size()), "object") +
+        " on the tray, " + std::to_string(record.picks) + " picked, " +
+        std::to_string(record.failed_picks) + " failed";
+    // Each panel lists its own objects under it: the estimates and the picks are different
+    // things, and one merged list alternated between them.
+    return svg::image_panels(title, svg::BackgroundImage::from_raster(view.shaded), panels,
+                             svg::PanelLayout{480, 2, true});
   }
 
   nlohmann::json summary_json(const UnloadingResult& result, double threshold) const {
@@ -240,6 +247,10 @@ class Simulation {
                               {"gibbs_sweeps", arguments_.estimate.gibbs_sweeps},
                               {"icp_samples", arguments_.estimate.icp_samples},
                               {"seed", arguments_.estimate.seed}};
+    // Only where given, so the summaries of runs without them keep their bytes.
+    if (!arguments_.split_type.empty()) options["split_type"] = arguments_.split_type;
+    if (arguments_.models_dir != "models") options["models_dir"] = arguments_.models_dir;
+    if (!arguments_.targets.empty()) options["targets"] = fs::absolute(arguments_.targets).string();
     nlohmann::json rounds = nlohmann::json::array();
     nlohmann::json failures = nlohmann::json::array();
     for (const RoundRecord& record : result.rounds) {
@@ -325,9 +336,15 @@ SimulateSummary run_simulation(
           : arguments.compare_thresholds;
   batch::claim_output_folder(arguments.out, "simulate");
 
-  const datasets::BopDataset dataset = datasets::BopDataset::open(arguments.dataset);
+  batch::DatasetOptions dataset_options;  // the shared dataset options: one way to open
+  dataset_options.dataset = arguments.dataset;
+  dataset_options.split = arguments.split;
+  dataset_options.split_type = arguments.split_type;
+  dataset_options.models_dir = arguments.models_dir;
+  dataset_options.targets = arguments.targets;
+  const datasets::BopDataset dataset = batch::open_dataset(dataset_options);
   datasets::DatasetSelection selection;
-  selection.splits = {arguments.split};
+  selection.splits = {batch::split_folder(dataset_options)};
   selection.scene_ids = {arguments.scene};
   selection.image_ids = {arguments.image};
   const std::vector<datasets::ImageKey> keys = dataset.list_images(selection);

@@ -129,6 +129,7 @@ NamedPlot belief_plot(const BeliefImage& figure, double variance_threshold_cm2) 
     svg::ProjectedObject projected;
     projected.label = object.label + " (gt " + std::to_string(object.gt_id) + ")";
     projected.colour = svg::category_colour(static_cast<int>(i));
+    projected.tag = std::to_string(object.gt_id);  // as in the legend: stacked objects told apart
     for (size_t p = 0; p < iterations.size(); ++p) {
       svg::ProjectedObject samples = projected;
       samples.points = svg::project_to_pixels(figure.K, per_panel[p]);
@@ -151,7 +152,7 @@ NamedPlot belief_plot(const BeliefImage& figure, double variance_threshold_cm2) 
   NamedPlot plot;
   plot.name = belief_plot_name(image);
   const std::string threshold = batch::printf_general(variance_threshold_cm2);
-  plot.caption = "Belief samples of the " + std::to_string(drawn) + " estimated objects of " +
+  plot.caption = "Belief samples of the " + batch::count_text(drawn, "estimated object") + " of " +
                  image_id(image) + " (scene visibility " +
                  (image.scene_visibility ? percent(*image.scene_visibility) : "undefined") +
                  ") projected on its " + figure.background_kind +
@@ -163,9 +164,12 @@ NamedPlot belief_plot(const BeliefImage& figure, double variance_threshold_cm2) 
                  "(Fig. 2 f, Fig. 3): ringed cross confident (max-axis variance \u2264 " +
                  threshold + " cm\u00b2, " + std::to_string(confident) + " of " +
                  std::to_string(drawn) +
-                 "), dashed ring not confident, diamond the ground-truth object centre.";
+                 "), dashed ring not confident, diamond the ground-truth object centre; the "
+                 "number beside a marker is the object's gt id.";
+  // Two panels a row, each wide enough to tell stacked objects apart (480 px for a 640 px
+  // image: the page is 1100 px wide, so the figure is drawn at full size).
   plot.svg = svg::image_panels("Beliefs and estimates in " + image_id(image), figure.background,
-                               panels, 300);
+                               panels, svg::PanelLayout{480, 2, false});
   return plot;
 }
 

@@ -135,7 +135,18 @@ std::string image_visibility_plot(const std::string& title,
   std::vector<svg::Bar> bars;
   for (size_t i = 0; i < image_objects.size(); ++i) {
     const ObjectRow& object = image_objects[i];
-    const std::string percent = batch::printf_fixed(100.0 * object.visib_fract, 0) + "%";
+    std::string percent = batch::printf_fixed(100.0 * object.visib_fract, 0) + "%";
+    // The bar is the visib_fract column. In rendered mode (Eq. 10, V_i = v_i / K_i) the part
+    // outside the image does not count, so an object mostly outside it can be 100% visible:
+    // say how much of it is in the image. (bop19/bop18 count that part as hidden: visib_fract
+    // = px_count_visib / px_count_all, and there is nothing to add.)
+    if (object.px_count_all > 0 && object.px_count_valid < object.px_count_all &&
+        object.visib_fract >
+            static_cast<double>(object.px_count_visib) / object.px_count_all + 1e-9) {
+      const std::string in_image = batch::printf_fixed(
+          100.0 * static_cast<double>(object.px_count_valid) / object.px_count_all, 0);
+      if (in_image != "100") percent += " (only " + in_image + "% in the image)";
+    }
     const bool low = object.visib_fract < visibility_cutoff;
     bars.push_back({object.label + " (gt " + std::to_string(object.gt_id) + ")",
                     100.0 * object.visib_fract, svg::category_colour(static_cast<int>(i)), percent,

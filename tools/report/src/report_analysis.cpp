@@ -206,9 +206,9 @@ std::string format_console_summary(const ReportAnalysis& analysis) {
   const ThresholdRow& chosen = analysis.thresholds.chosen;
   const Statistic& recommended = analysis.thresholds.recommendation.largest_with_min_precision;
   std::ostringstream out;
-  out << "objects:               " << analysis.counts.objects << " in " << analysis.counts.images
-      << " images, " << analysis.counts.estimated << " estimated, " << analysis.counts.confident
-      << " confident";
+  out << "objects:               " << analysis.counts.objects << " in "
+      << batch::count_text(analysis.counts.images, "image") << ", " << analysis.counts.estimated
+      << " estimated, " << analysis.counts.confident << " confident";
   if (analysis.counts.out_of_view > 0) {
     out << "; " << analysis.counts.out_of_view << " out of view, not analysed";
   }

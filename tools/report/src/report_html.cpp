@@ -30,24 +30,46 @@ h1{font-size:1.6em;margin-bottom:4px}h2{font-size:1.25em;border-bottom:1px solid
 table{border-collapse:collapse;margin:8px 0 16px;font-size:0.9em}th,td{border:1px solid #ccc;padding:3px 8px;text-align:right}
 th{background:#f2f2f2}td.text,th.text{text-align:left}td.na{color:#888;font-style:italic}
 .meta{color:#555;font-size:0.9em}.recommendation{background:#f4f8ff;border-left:4px solid #1f77b4;padding:8px 12px}
+table.run{width:100%;table-layout:fixed}table.run th{width:11em;vertical-align:top;overflow-wrap:anywhere}table.run td{overflow-wrap:anywhere}.setting{margin-right:1em}
 figure{margin:16px 0 28px}figure svg{max-width:100%;height:auto;display:block;border:1px solid #eee}figcaption{color:#444;font-size:0.9em;margin-top:4px}
 )";
 
-// The page head and the line naming the tool version and the run.
+// A run-record value as text: strings as they are, everything else as compact JSON.
+std::string run_value_text(const Json& value) {
+  return value.is_string() ? value.get<std::string>() : value.dump();
+}
+
+// A run-record value in a table cell: an object as "key: value" items that wrap between items
+// (nested values as compact JSON, broken anywhere when longer than the column), not one long
+// line of JSON.
+std::string run_value_html(const Json& value) {
+  if (!value.is_object() || value.empty()) return html_escape(run_value_text(value));
+  std::string html;
+  for (const auto& [key, item] : value.items()) {
+    html += "<span class=\"setting\"><b>" + html_escape(key) +
+            "</b>: " + html_escape(run_value_text(item)) + "</span> ";
+  }
+  html.pop_back();
+  return html;
+}
+
+// The page head, the line naming the tool version and the run record (dataset, every step's
+// options) as a table that wraps to the page width.
 void write_head(std::ostringstream& out, const Json& run) {
   out << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
       << "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n"
       << "<link rel=\"icon\" href=\"data:,\">\n<title>clutterscope clutter report</title>\n"
       << "<style>\n"
       << kCss << "</style>\n</head>\n<body>\n<h1>Clutter report</h1>\n"
-      << "<p class=\"meta\">clutterscope " << CLUTTERSCOPE_VERSION;
-  if (run.is_object()) {
+      << "<p class=\"meta\">clutterscope " << CLUTTERSCOPE_VERSION << "</p>\n";
+  if (run.is_object() && !run.empty()) {
+    out << "<table class=\"run meta\">\n";
     for (const auto& [key, value] : run.items()) {
-      out << " &middot; " << html_escape(key) << ": "
-          << html_escape(value.is_string() ? value.get<std::string>() : value.dump());
+      out << "<tr><th class=\"text\">" << html_escape(key) << "</th><td class=\"text\">"
+          << run_value_html(value) << "</td></tr>\n";
     }
+    out << "</table>\n";
   }
-  out << "</p>\n";
 }
 
 // The summary table: counts, confident shares, median visibility.

@@ -15,6 +15,7 @@
 
 namespace clutterscope::report::svg {
 
+using detail::chars_fitting;
 using detail::kMarginTop;
 using detail::num;
 using detail::svg_open;
@@ -192,25 +193,28 @@ struct PanelLegend {
   bool any_samples = false, any_confident = false, any_uncertain = false, any_truth = false;
 };
 
-PanelLegend panel_legend(const std::vector<ImagePanel>& panels) {
-  PanelLegend legend;
-  for (const ImagePanel& panel : panels) {
-    for (const ProjectedObject& object : panel.objects) {
-      const bool listed =
-          std::any_of(legend.labels.begin(), legend.labels.end(),
-                      [&](const auto& entry) { return entry.first == object.label; });
-      if (!listed) legend.labels.emplace_back(object.label, object.colour);
-      legend.any_samples |= !object.points.empty();
-      legend.any_confident |= object.estimate && object.estimate_confident;
-      legend.any_uncertain |= object.estimate && !object.estimate_confident;
-      legend.any_truth |= object.ground_truth.has_value();
-    }
+void add_to_legend(const ImagePanel& panel, PanelLegend* legend) {
+  for (const ProjectedObject& object : panel.objects) {
+    const bool listed = std::any_of(legend->labels.begin(), legend->labels.end(),
+                                    [&](const auto& entry) { return entry.first == object.label; });
+    if (!listed) legend->labels.emplace_back(object.label, object.colour);
+    legend->any_samples |= !object.points.empty();
+    legend->any_confident |= object.estimate && object.estimate_confident;
+    legend->any_uncertain |= object.estimate && !object.estimate_confident;
+    legend->any_truth |= object.ground_truth.has_value();
   }
-  return legend;
 }
 
-// One panel's samples and markers over its copy of the background at (left, top), scaled by
-// `scale`; points outside the image are clipped.
+// An axis-aligned box of a placed tag, in SVG pixels.
+struct Box {
+  double left, top, right, bottom;
+  bool overlaps(const Box& other) const {
+    return left < other.right && other.left < right && top < other.bottom && other.top < bottom;
+  }
+};
+
+// One panel's samples, markers and tags over its copy of the background at (left, top),
+// scaled by `scale`; points outside the image are clipped.
 void draw_objects(std::ostream& out, const ImagePanel& panel, const BackgroundImage& background,
                   double left, double top, double scale) {
   const auto inside = [&](const std::array<double, 2>& point) {
@@ -237,30 +241,136 @@ void draw_objects(std::ostream& out, const ImagePanel& panel, const BackgroundIm
                              object.estimate_confident);
     }
   }
+  // Tags last, over every marker, each at the first spot around its marker that no earlier
+  // tag of the panel covers (stacked objects project close together).
+  std::vector<Box> placed;
+  for (const ProjectedObject& object : panel.objects) {
+    if (object.tag.empty()) continue;
+    const auto& at =
+        object.estimate && inside(*object.estimate) ? object.estimate : object.ground_truth;
+    if (!at || !inside(*at)) continue;
+    const double x = left + (*at)[0] * scale, y = top + (*at)[1] * scale;
+    const double w = 7.0 * static_cast<double>(object.tag.size()) + 4, h = 14;
+    // Right, left, above, below, then the diagonals, then further out to the right.
+    const std::array<std::array<double, 2>, 9> offsets = {{{12, -7},
+                                                           {-12 - w, -7},
+                                                           {-w / 2, -12 - h},
+                                                           {-w / 2, 12},
+                                                           {10, -10 - h},
+                                                           {-10 - w, -10 - h},
+                                                           {10, 10},
+                                                           {-10 - w, 10},
+                                                           {26, -7}}};
+    Box box{};
+    for (const auto& offset : offsets) {
+      box = {x + offset[0], y + offset[1], x + offset[0] + w, y + offset[1] + h};
+      if (std::none_of(placed.begin(), placed.end(),
+                       [&](const Box& other) { return box.overlaps(other); })) {
+        break;
+      }
+    }
+    placed.push_back(box);
+    out << "<text x=\"" << num(box.left + 2) << "\" y=\"" << num(box.bottom - 3)
+        << "\" font-size=\"11\" font-weight=\"bold\" fill=\"" << object.colour.hex()
+        << "\" stroke=\"#ffffff\" stroke-width=\"3\" paint-order=\"stroke\">"
+        << escape_xml(object.tag) << "</text>\n";
+  }
+}
+
+constexpr int kLegendRow = 20;
+constexpr int kLegendColumnWidth = 190;
+
+int marker_entries(const PanelLegend& legend) {
+  return legend.any_samples + legend.any_confident + legend.any_uncertain + legend.any_truth;
+}
+
+// Rows of a legend in `columns` columns: the labels, then the markers that occur.
+int legend_rows(const PanelLegend& legend, int columns) {
+  const int labels = static_cast<int>(legend.labels.size());
+  return (labels + columns - 1) / columns + (marker_entries(legend) + columns - 1) / columns;
+}
+
+// A legend from (left, top) over `width` pixels in `columns` columns: the labels (cut to the
+// column with "...", the whole label as the tooltip), then the markers that occur.
+void draw_legend(std::ostream& out, const PanelLegend& legend, double left, double top,
+                 double width, int columns) {
+  const double column = width / columns;
+  const std::size_t fitting = chars_fitting(column - 20);
+  int slot = 0;  // entries drawn, row-major
+  const auto position = [&]() {
+    return std::make_pair(left + (slot % columns) * column, top + (slot / columns) * kLegendRow);
+  };
+  for (const auto& [label, colour] : legend.labels) {
+    const auto [x, y] = position();
+    out << "<circle cx=\"" << num(x + 6) << "\" cy=\"" << num(y) << "\" r=\"5\" fill=\""
+        << colour.hex() << "\"/>\n";
+    const std::string text =
+        label.size() > fitting ? label.substr(0, fitting > 3 ? fitting - 3 : 0) + "..." : label;
+    out << "<text x=\"" << num(x + 16) << "\" y=\"" << num(y + 4)
+        << "\" text-anchor=\"start\"><title>" << escape_xml(label) << "</title>" << escape_xml(text)
+        << "</text>\n";
+    ++slot;
+  }
+  slot = (slot + columns - 1) / columns * columns;  // the markers start a row
+  const Colour grey{90, 90, 90};
+  const auto entry = [&](const std::string& kind, const std::string& text) {
+    const auto [x, y] = position();
+    const double cx = x + 10;
+    if (kind == "sample") {
+      out << "<circle cx=\"" << num(cx) << "\" cy=\"" << num(y) << "\" r=\"2.5\" fill=\""
+          << grey.hex() << "\"/>\n";
+    } else if (kind == "truth") {
+      out << ground_truth_marker(cx, y, grey);
+    } else {
+      out << estimate_marker(cx, y, grey, kind == "confident");
+    }
+    out << text_element(x + 24, y + 4, text, "start");
+    ++slot;
+  };
+  if (legend.any_samples) entry("sample", "belief sample");
+  if (legend.any_confident) entry("confident", "confident estimate");
+  if (legend.any_uncertain) entry("uncertain", "not confident estimate");
+  if (legend.any_truth) entry("truth", "ground-truth centre");
 }
 
 }  // namespace
 
 std::string image_panels(const std::string& title, const BackgroundImage& background,
                          const std::vector<ImagePanel>& panels, int panel_width) {
+  return image_panels(title, background, panels, PanelLayout{panel_width, 0, false});
+}
+
+std::string image_panels(const std::string& title, const BackgroundImage& background,
+                         const std::vector<ImagePanel>& panels, const PanelLayout& layout) {
   if (background.width <= 0 || background.height <= 0) {
     throw std::invalid_argument("image panels need a background image with a size");
   }
   constexpr int kGap = 12;
   constexpr int kPanelTitle = 22;
-  constexpr int kLegendRow = 20;
-  constexpr int kLegendPerRow = 4;
+  const int panel_width = layout.panel_width;
   const double scale = static_cast<double>(panel_width) / background.width;
   const int panel_height = static_cast<int>(std::lround(background.height * scale));
   const int count = std::max<int>(1, panels.size());
-  const PanelLegend legend_entries = panel_legend(panels);
-  const auto& [legend, any_samples, any_confident, any_uncertain, any_truth] = legend_entries;
-  const bool marker_legend = any_confident || any_uncertain || any_truth;
-  const int legend_rows =
-      (static_cast<int>(legend.size()) + kLegendPerRow - 1) / kLegendPerRow + marker_legend;
-  const int width = kGap + count * (panel_width + kGap);
-  const int images_top = kMarginTop + kPanelTitle;
-  const int height = images_top + panel_height + kGap + legend_rows * kLegendRow + kGap;
+  const int columns = layout.columns > 0 ? std::min(layout.columns, count) : count;
+  const int rows = (count + columns - 1) / columns;
+  const int width = kGap + columns * (panel_width + kGap);
+
+  // The legends: one under every panel, or one for all under the last row.
+  std::vector<PanelLegend> legends(layout.legend_per_panel ? panels.size() : 1);
+  for (size_t p = 0; p < panels.size(); ++p) {
+    add_to_legend(panels[p], &legends[layout.legend_per_panel ? p : 0]);
+  }
+  const int legend_width = layout.legend_per_panel ? panel_width : width - 2 * kGap;
+  const int legend_columns = std::max(1, legend_width / kLegendColumnWidth);
+  int legend_height = 0;  // of the tallest legend
+  for (const PanelLegend& legend : legends) {
+    legend_height = std::max(legend_height, legend_rows(legend, legend_columns) * kLegendRow);
+  }
+  // A row of panels: title, image, and with legend_per_panel each panel's legend.
+  const int row_height =
+      kPanelTitle + panel_height + kGap + (layout.legend_per_panel ? legend_height + kGap : 0);
+  const int height =
+      kMarginTop + rows * row_height + (layout.legend_per_panel ? 0 : legend_height + kGap);
   // Distinct for the figures of one HTML page.
   const std::string id =
       "bg-" + batch::format_hex64(datasets::fnv1a64(title + background.png_bytes));
@@ -271,37 +381,20 @@ std::string image_panels(const std::string& title, const BackgroundImage& backgr
       << panel_height << "\" preserveAspectRatio=\"none\" href=\"data:image/png;base64,"
       << base64(background.png_bytes) << "\"/></defs>\n";
   for (size_t p = 0; p < panels.size(); ++p) {
-    const double left = kGap + p * (panel_width + kGap);
+    const double left = kGap + static_cast<double>(p % columns) * (panel_width + kGap);
+    const int images_top = kMarginTop + static_cast<int>(p / columns) * row_height + kPanelTitle;
     out << text_element(left + panel_width / 2.0, images_top - 8, panels[p].title, "middle",
                         " font-size=\"13\"");
     out << "<use href=\"#" << id << "\" x=\"" << num(left) << "\" y=\"" << images_top << "\"/>\n";
     draw_objects(out, panels[p], background, left, images_top, scale);
-  }
-  const double legend_top = images_top + panel_height + kGap + kLegendRow / 2.0;
-  const double legend_column = static_cast<double>(width - 2 * kGap) / kLegendPerRow;
-  for (size_t i = 0; i < legend.size(); ++i) {
-    const double x = kGap + (i % kLegendPerRow) * legend_column;
-    const double y = legend_top + (i / kLegendPerRow) * kLegendRow;
-    out << "<circle cx=\"" << num(x + 6) << "\" cy=\"" << num(y) << "\" r=\"5\" fill=\""
-        << legend[i].second.hex() << "\"/>\n";
-    out << text_element(x + 16, y + 4, legend[i].first, "start");
-  }
-  if (marker_legend) {
-    const Colour grey{90, 90, 90};
-    double x = kGap;
-    const double y = legend_top + (legend_rows - 1) * kLegendRow;
-    const auto entry = [&](const std::string& marker, const std::string& text) {
-      out << marker << text_element(x + 24, y + 4, text, "start");
-      x += legend_column;
-    };
-    if (any_samples) {
-      entry("<circle cx=\"" + num(x + 10) + "\" cy=\"" + num(y) + "\" r=\"2.5\" fill=\"" +
-                grey.hex() + "\"/>\n",
-            "belief sample");
+    if (layout.legend_per_panel) {
+      draw_legend(out, legends[p], left, images_top + panel_height + kGap + kLegendRow / 2.0,
+                  panel_width, legend_columns);
     }
-    if (any_confident) entry(estimate_marker(x + 10, y, grey, true), "confident estimate");
-    if (any_uncertain) entry(estimate_marker(x + 10, y, grey, false), "not confident estimate");
-    if (any_truth) entry(ground_truth_marker(x + 10, y, grey), "ground-truth centre");
+  }
+  if (!layout.legend_per_panel) {
+    draw_legend(out, legends.front(), kGap, kMarginTop + rows * row_height + kLegendRow / 2.0,
+                width - 2 * kGap, legend_columns);
   }
   out << "</svg>\n";
   return out.str();

@@ -1,6 +1,7 @@
 // Charts with linear or log axes and horizontal bar charts.
 
 #include <algorithm>
+#include <clutterscope/batch/formats.hpp>
 #include <clutterscope/report/svg.hpp>
 #include <cmath>
 #include <sstream>
@@ -227,8 +228,14 @@ void Chart::render_side_panel(std::ostream& out, const Layout& layout) const {
           << num(side_x + 24) << "\" y2=\"" << num(side_y) << "\""
           << line_style(s.colour, 2.0, s.dashed || s.kind != Kind::kLine) << "/>\n";
     }
-    out << text_element(side_x + 30, side_y + 4, s.legend, "start");
-    side_y += 20;
+    // Wrapped to the panel: a long entry (a name with its n) is not cut off at the edge.
+    const std::vector<std::string> lines =
+        wrap_words(s.legend, chars_fitting(width_ - side_x - 32));
+    for (const std::string& line : lines) {
+      out << text_element(side_x + 30, side_y + 4, line, "start");
+      side_y += 15;
+    }
+    side_y += 5;
   }
   if (colour_scale_) {
     constexpr int kSteps = 40;
@@ -248,9 +255,18 @@ void Chart::render_side_panel(std::ostream& out, const Layout& layout) const {
         colour_scale_->max > colour_scale_->min ? colour_scale_->max : colour_scale_->min + 1.0;
     bar.pixel_lo = bar_top + bar_height;
     bar.pixel_hi = bar_top;
+    // Values above the maximum take its colour: the top of the bar says so ("\u2265 3").
     double step = 0.0;
-    for (double t : bar.ticks(&step)) {
-      out << text_element(side_x + 22, bar.to_pixel(t) + 4, tick_label(t, step), "start");
+    const std::vector<double> ticks = bar.ticks(&step);
+    const auto at_top = [&](double t) { return std::abs(t - bar.hi) <= 1e-9 * (1 + std::abs(t)); };
+    if (std::none_of(ticks.begin(), ticks.end(), at_top)) {
+      out << text_element(side_x + 22, bar_top + 4, "\u2265 " + batch::printf_general(bar.hi, 3),
+                          "start");
+    }
+    for (double t : ticks) {
+      if (!at_top(t) && bar.to_pixel(t) < bar_top + 14) continue;  // under the top label
+      out << text_element(side_x + 22, bar.to_pixel(t) + 4,
+                          (at_top(t) ? "\u2265 " : "") + tick_label(t, step), "start");
     }
   }
 }
@@ -270,9 +286,14 @@ std::string bar_chart(const std::string& title, const std::vector<Bar>& bars,
                       const AxisSpec& value_axis, int width) {
   constexpr int kRow = 24;
   constexpr int kLabelWidth = 170;
-  constexpr int kValueTextWidth = 60;
+  // Room for the longest text at a bar's end ("100% (only 18% in the image)").
+  int value_text_width = 60;
+  for (const Bar& bar : bars) {
+    value_text_width =
+        std::max(value_text_width, static_cast<int>(std::ceil(bar.value_text.size() * 7.2)) + 12);
+  }
   const int plot_left = kLabelWidth;
-  const int plot_right = width - kValueTextWidth;
+  const int plot_right = width - value_text_width;
   const int plot_top = kMarginTop;
   const int plot_bottom = plot_top + std::max<int>(1, bars.size()) * kRow;
   const int height = plot_bottom + kMarginBottom;

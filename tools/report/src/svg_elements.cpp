@@ -31,6 +31,25 @@ std::string text_element(double x, double y, const std::string& text, const char
   return out.str();
 }
 
+std::vector<std::string> wrap_words(const std::string& text, std::size_t max_chars) {
+  std::vector<std::string> lines;
+  std::string line;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    std::size_t end = text.find(' ', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string word = text.substr(start, end - start);
+    if (!line.empty() && line.size() + 1 + word.size() > max_chars) {
+      lines.push_back(line);
+      line.clear();
+    }
+    line += (line.empty() ? "" : " ") + word;
+    start = end + 1;
+  }
+  if (!line.empty() || lines.empty()) lines.push_back(line);
+  return lines;
+}
+
 std::string tick_label(double value, double step) {
   std::string text;
   if (step <= 0.0) {

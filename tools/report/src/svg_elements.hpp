@@ -3,6 +3,7 @@
 // The SVG building blocks the charts and image panels share (private to the report library):
 // the page margins, fixed-decimal coordinates, text elements, tick labels and axis scales.
 
+#include <algorithm>
 #include <clutterscope/report/svg.hpp>
 #include <string>
 #include <vector>
@@ -22,6 +23,13 @@ std::string num(double value);
 std::string svg_open(int width, int height, const std::string& title);
 std::string text_element(double x, double y, const std::string& text, const char* anchor,
                          const std::string& extra = "");
+// `text` broken at spaces into lines of at most `max_chars` bytes (a longer word stays whole).
+std::vector<std::string> wrap_words(const std::string& text, std::size_t max_chars);
+// About how many characters of 12 px text fit into `pixels` (DejaVu Sans averages below 7.2 px
+// a character; counting bytes over-counts non-ASCII, which only wraps earlier).
+inline std::size_t chars_fitting(double pixels) {
+  return static_cast<std::size_t>(std::max(1.0, pixels / 7.2));
+}
 // Tick label for a value: as few decimals as the tick step needs.
 std::string tick_label(double value, double step);
 std::string line_style(Colour colour, double width, bool dashed);

@@ -84,6 +84,7 @@ class DetectionsWriter {
 
  private:
   std::filesystem::path path_, temporary_;
+  std::vector<std::filesystem::path> created_folders_;  // deepest first: removed when unfinished
   std::ofstream stream_;
   std::size_t count_ = 0;
   bool finished_ = false;

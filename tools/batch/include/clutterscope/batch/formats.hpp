@@ -30,6 +30,15 @@ std::string format_hex64(std::uint64_t value);
 std::string printf_fixed(double value, int decimals);
 std::string printf_general(double value, int significant = 6);
 
+// A count with its noun in the right number: count_text(1, "image") == "1 image",
+// count_text(3, "image") == "3 images", count_text(2, "box", "boxes") == "2 boxes".
+std::string count_text(long long count, const std::string& singular, const std::string& plural);
+std::string count_text(long long count, const std::string& singular);  // plural: singular + "s"
+
+// A duration for people: three significant digits below 100 s ("0.859 s", "12.3 s"), whole
+// seconds from there ("245 s").
+std::string seconds_text(double seconds);
+
 // A CSV field: quoted (with doubled quotes) only when it holds ',', '"', '\n' or '\r'.
 std::string csv_escape(std::string_view text);
 

@@ -39,9 +39,9 @@ void claim_output_folder(const std::filesystem::path& dir, const std::string& co
 void refuse_dataset_content(const std::filesystem::path& path, const std::string& what);
 
 // Throws UsageError when `file` (an output file such as detect's JSON, named by `option`) is
-// a folder, lies in a dataset's split, scene or models folder, lies in (or below) a folder that
-// holds a command's results, or exists and `written_by_command(file)` says `command` did not
-// write it. A dataset's root folder is fine.
+// a folder or ends with '/', lies in a dataset's split, scene or models folder, lies in (or
+// below) a folder that holds a command's results, or exists and `written_by_command(file)` says
+// `command` did not write it. A dataset's root folder is fine.
 void claim_output_file(const std::filesystem::path& file, const std::string& option,
                        const std::string& command,
                        const std::function<bool(const std::filesystem::path&)>& written_by_command);

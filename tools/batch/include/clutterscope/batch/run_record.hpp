@@ -9,7 +9,8 @@
 namespace clutterscope::batch {
 
 // Records the GL renderer of the run (render::renderer_in_use) in OUT/run.json as
-// "gl_renderer": the name, or null when nothing was rendered in this run. Rewrites the file
+// "gl_renderer": the name, or null when nothing was rendered in this run, and the build it ran
+// (build_record of build_info.hpp: tool_version, git_commit, git_tree_dirty). Rewrites the file
 // atomically; throws datasets::DatasetError when it cannot be read, datasets::WriteError.
 void record_renderer(const std::filesystem::path& out_dir, const std::string& renderer);
 

@@ -23,7 +23,18 @@ using batch::selection_of;
 using batch::split_folder;
 using batch::warn_if_more_jobs_than_cores;
 
-// Adds the shared options to a subcommand. `options` must outlive parsing.
-void add_dataset_options(CLI::App& command, DatasetOptions* options);
+// Which of the shared options a command takes, or-ed together. Every command that reads a
+// dataset takes kDataset, so --models-dir, --split-type and --targets work the same everywhere.
+enum DatasetOptionGroups : unsigned {
+  kDataset = 1,   // DATASET, --split, --split-type, --models-dir, --targets
+  kScenes = 2,    // --scenes
+  kImages = 4,    // --images
+  kBatchRun = 8,  // --out DIR, --jobs, --shard, --keep-going, --quiet
+  kAllDatasetOptions = kDataset | kScenes | kImages | kBatchRun,  // the per-image batch commands
+};
+
+// Adds the shared options of `groups` to a subcommand. `options` must outlive parsing.
+void add_dataset_options(CLI::App& command, DatasetOptions* options,
+                         unsigned groups = kAllDatasetOptions);
 
 }  // namespace clutterscope::cli

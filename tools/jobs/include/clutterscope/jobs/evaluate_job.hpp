@@ -106,8 +106,8 @@ batch::BatchOutputSpec evaluate_output_spec();
 // results file (datasets::read_bop_results's checks, and an obj_id that is no model of the
 // dataset or a scene_id / im_id that is no image of the split, naming file, line and field),
 // a missing or inconsistent scene_gt_info.json, bad targets, models or GT; Cancelled. `control`:
-// progress, cancellation, and errors.csv, the by-visibility tables and summary.json in memory
-// (scores.json and by_visibility.json stay files).
+// progress, cancellation, and errors.csv and summary.json in memory (scores.json, the
+// by-visibility tables and by_visibility.json, written by the summary, stay files in OUT).
 JobSummary run_evaluate(const EvaluateJobOptions& options, const RunControl& control = {});
 
 // run_evaluate without a callback and without the results in memory (the CLI's).

@@ -20,6 +20,9 @@ namespace clutterscope::jobs {
 struct SimulateOptions {
   std::string dataset;  // a BOP dataset folder
   std::string split = "test";
+  std::string split_type;             // reads folder SPLIT_TYPE and camera_TYPE.json
+  std::string models_dir = "models";  // the models folder under DATASET
+  std::string targets;                // a BOP test-targets file: the image must be a target
   int scene = 0;
   int image = 0;
   std::string out;                             // the output folder

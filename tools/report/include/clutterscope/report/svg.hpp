@@ -129,6 +129,10 @@ struct ProjectedObject {
   std::optional<std::array<double, 2>> estimate;      // final estimate, drawn as a ringed cross
   bool estimate_confident = true;                     // false: a dashed ring and no cross
   std::optional<std::array<double, 2>> ground_truth;  // drawn as a hollow diamond
+  // Short text beside the estimate (else the ground-truth) marker, e.g. a pick order "#1" or a
+  // gt id: placed where it overlaps no other tag of the panel, so stacked objects whose
+  // markers overlap stay told apart. Empty: none.
+  std::string tag;
 };
 
 // Projects camera-frame points (metres, OpenCV pinhole) to image pixel coordinates with K:
@@ -145,10 +149,22 @@ struct ImagePanel {
   std::vector<ProjectedObject> objects;
 };
 
-// Panels side by side over the same background, each scaled to `panel_width` pixels, with a
-// legend of object labels in their colours and, when a panel has estimates or ground truth, of
-// the markers. Points outside the image are clipped. The background is embedded once (an
-// <image> in <defs> that each panel <use>s, its id derived from the title and the image).
+// How image_panels arranges its panels.
+struct PanelLayout {
+  int panel_width = 360;  // pixels; the image is scaled to it
+  int columns = 0;        // panels per row; 0: all in one row
+  // true: each panel lists its own objects under it (panels that show different things, e.g.
+  // simulate's estimates and picks); false: one legend of every label under all panels.
+  bool legend_per_panel = false;
+};
+
+// Panels in rows over the same background, with a legend of object labels in their colours
+// and, when a panel has estimates or ground truth, of the markers. Points outside the image
+// are clipped. The background is embedded once (an <image> in <defs> that each panel <use>s,
+// its id derived from the title and the image).
+std::string image_panels(const std::string& title, const BackgroundImage& background,
+                         const std::vector<ImagePanel>& panels, const PanelLayout& layout);
+// All panels in one row, `panel_width` pixels each, one legend.
 std::string image_panels(const std::string& title, const BackgroundImage& background,
                          const std::vector<ImagePanel>& panels, int panel_width = 360);
 
