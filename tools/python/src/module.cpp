@@ -366,12 +366,6 @@ py::dict run_evaluate(const Dataset& dataset, const py::dict& kw) {
       [&options, &control] { return jobs::run_evaluate(options, control); }));
 }
 
-// --name value as `report` forwards an option to its steps (jobs::GivenOptions).
-void give(jobs::GivenOptions* given, const std::string& name, const py::handle& value) {
-  if (value.is_none()) return;
-  (*given)[name] = py::str(value).cast<std::string>();
-}
-
 py::dict run_report(const Dataset& dataset, const py::dict& kw) {
   jobs::ReportJobOptions options;
   options.dataset = run_options(dataset, kw["out"].cast<std::string>(), kw["jobs"].cast<int>(),
@@ -392,21 +386,10 @@ py::dict run_report(const Dataset& dataset, const py::dict& kw) {
   visibility_kw["write_bop_info"] = false;
   visibility_kw["masks"] = false;
   visibility_kw["overlays"] = false;
-  visibility_kw["delta_mm"] = kw["delta_mm"];
   const jobs::VisibilityJobOptions visibility = visibility_options(dataset, visibility_kw);
   py::dict estimate_kw = kw.attr("copy")();
   estimate_kw["beliefs"] = false;
   const jobs::EstimateJobOptions estimate = estimate_options(dataset, estimate_kw);
-  give(&options.visibility_given, "--mode", kw["mode"]);
-  give(&options.visibility_given, "--delta-mm", kw["delta_mm"]);
-  give(&options.visibility_given, "--pixel-center", kw["pixel_center"]);
-  for (const char* name :
-       {"particles", "iterations", "gibbs_sweeps", "icp_samples", "observation", "detections"}) {
-    std::string flag = std::string("--") + name;
-    for (char& c : flag) c = c == '_' ? '-' : c;
-    give(&options.estimate_given, flag, kw[name]);
-  }
-  if (!kw["time"].cast<bool>()) options.estimate_given["--no-time"] = "";
 
   Monitor monitor(kw["progress"]);
   // Both steps' options and the dataset selection are checked before anything is written.
