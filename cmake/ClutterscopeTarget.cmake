@@ -56,6 +56,10 @@ function(clutterscope_add_library name)
     PUBLIC $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include> $<INSTALL_INTERFACE:include>
     PRIVATE ${CMAKE_CURRENT_SOURCE_DIR}/src)
   target_link_libraries(clutterscope_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+  # The Python module (a shared object) links the libraries: their code must be PIC.
+  if(CLUTTERSCOPE_PYTHON)
+    set_target_properties(clutterscope_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  endif()
   clutterscope_configure_target(clutterscope_${name})
   _clutterscope_register_library(${name})
 endfunction()

@@ -23,6 +23,8 @@ packages=(
   chromium
   jupyter-nbconvert python3-nbclient python3-nbformat python3-ipykernel
   python3-pandas python3-matplotlib python3-jsonschema
+  # the Python module (tools/python) and its pytest suite
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-tqdm
 )
 
 missing=()

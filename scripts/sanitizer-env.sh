@@ -14,9 +14,11 @@ fi
 # build-san/: clang, ASan + UBSan on everything, our code at -O1 with line tables, test code at
 # -O0 (tests/CMakeLists.txt), and libFuzzer's coverage instrumentation, so that the same objects
 # serve the test suites and the fuzz targets (CLUTTERSCOPE_FUZZ, cmake/ClutterscopeTarget.cmake).
+# No Python module: a sanitized extension would need the ASan runtime preloaded into python3.
 sanitizer_tree="$root/build-san"
 configure_sanitizer_tree() {
   cmake -S "$root" -B "$sanitizer_tree" -G Ninja -DCMAKE_BUILD_TYPE=Release \
     -DCMAKE_CXX_FLAGS=-g1 -DCMAKE_CXX_COMPILER=clang++ -DCLUTTERSCOPE_FUZZ=ON \
+    -DCLUTTERSCOPE_PYTHON=OFF \
     "${CLUTTERSCOPE_LAUNCHER[@]}" >/dev/null
 }

@@ -92,6 +92,25 @@ summary = json.loads(summary_path.read_text()) if summary_path.exists() else {}
 if not isinstance(summary, dict):
     summary = {}
 
+# With the Python module clutterscope importable (`cmake --install`, or PYTHONPATH=build/python)
+# the report's decisions below come from the library: read_report runs the report's own analysis
+# with the parameters above, so the numbers are the report's by construction. Without it they
+# are recomputed here in pandas from the CSVs, with the same rules.
+try:
+    import clutterscope
+except ImportError:
+    clutterscope = None
+library_report = None
+if clutterscope is not None and has_estimates:
+    library_report = clutterscope.read_report(
+        report_dir, variance_threshold_cm2=VARIANCE_THRESHOLD_CM2,
+        visibility_cutoff=VISIBILITY_CUTOFF, accurate_cm=ACCURATE_CM)
+    print(f"decisions from the clutterscope module {clutterscope.__version__} (the report's "
+          f"analysis)")
+else:
+    print("clutterscope module not importable: decisions recomputed here with pandas from the "
+          "CSVs")
+
 print(f"{len(objects)} objects in {len(images)} images; {int(objects['estimated'].sum())} with an "
       f"estimate, {int((objects['estimated'] & objects['err_cm'].notna()).sum())} of them with a "
       f"measured error" + (f"; {out_of_view} out of view, not analysed" if out_of_view else ""))

@@ -32,15 +32,26 @@ def log_sweep(low, high, per_decade, exact):
     return sorted(set(grid) | set(exact))
 
 
-thresholds = log_sweep(0.01, 10.0, 10, [0.25, VARIANCE_THRESHOLD_CM2])
-sweep = pd.DataFrame([threshold_check(t) for t in thresholds])
-# Ascending thresholds, the later one winning ties, as the report recommends.
-recommended, best_f1, best_f1_value = None, None, None
-for row in sweep.itertuples():
-    if not np.isnan(row.precision) and row.precision >= PRECISION_TARGET:
-        recommended = float(row.threshold_cm2)
-    if not np.isnan(row.f1) and (best_f1_value is None or row.f1 >= best_f1_value):
-        best_f1, best_f1_value = float(row.threshold_cm2), row.f1
+if library_report is not None:
+    # The report's sweep and recommendation, computed by the library.
+    recommendation = library_report.summary["thresholds"]["recommended"]
+    PRECISION_TARGET = recommendation["min_precision"]
+    sweep = library_report.sweep.rename(columns={"accepted": "confident",
+                                                 "accepted_accurate": "confident_and_accurate"})
+    for column in ["precision", "recall", "f1"]:
+        sweep[column] = pd.to_numeric(sweep[column], errors="coerce")
+    recommended = recommendation["largest_with_min_precision_cm2"]
+    best_f1 = recommendation["best_f1_cm2"]
+else:
+    thresholds = log_sweep(0.01, 10.0, 10, [0.25, VARIANCE_THRESHOLD_CM2])
+    sweep = pd.DataFrame([threshold_check(t) for t in thresholds])
+    # Ascending thresholds, the later one winning ties, as the report recommends.
+    recommended, best_f1, best_f1_value = None, None, None
+    for row in sweep.itertuples():
+        if not np.isnan(row.precision) and row.precision >= PRECISION_TARGET:
+            recommended = float(row.threshold_cm2)
+        if not np.isnan(row.f1) and (best_f1_value is None or row.f1 >= best_f1_value):
+            best_f1, best_f1_value = float(row.threshold_cm2), row.f1
 print(f"{len(scored)} estimates with a measured error, {int(scored_accurate.sum())} of them accurate")
 print(f"largest threshold with precision >= {PRECISION_TARGET}: "
       f"{'undefined' if recommended is None else f'{recommended:.6g} cm²'}; F1 optimum at "

@@ -1,4 +1,14 @@
-chosen = threshold_check(VARIANCE_THRESHOLD_CM2)
+if library_report is not None:
+    # The chosen threshold's row of the report, computed by the library.
+    row = library_report.summary["thresholds"]["chosen"]
+    chosen = {"threshold_cm2": row["threshold_cm2"], "confident": row["accepted"],
+              "accurate": row["accurate"], "confident_and_accurate": row["accepted_accurate"],
+              "precision": np.nan if row["precision"] is None else row["precision"],
+              "recall": np.nan if row["recall"] is None else row["recall"],
+              "f1": np.nan if row["f1"] is None else row["f1"],
+              "accepted_below_cutoff": row["accepted_below_cutoff"]}
+else:
+    chosen = threshold_check(VARIANCE_THRESHOLD_CM2)
 estimated = objects[objects["estimated"]]
 confident_now = confident_at(estimated, VARIANCE_THRESHOLD_CM2)
 below = objects["visib_fract"] < VISIBILITY_CUTOFF

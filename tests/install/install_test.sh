@@ -64,9 +64,11 @@ case "$mode" in
     "$root/usr/bin/clutterscope" --version
     check_visibility "$root/usr/bin/clutterscope" "$root/usr/share/clutterscope/samples/tray6"
     if [ "${4:-}" = python ]; then
-      module=$(find "$root/usr/lib" -name 'clutterscope*.so' -path '*python3*' | head -1)
+      # The package clutterscope/ (tools/python): __init__.py beside the extension _clutterscope.
+      module=$(find "$root/usr/lib" -name '_clutterscope*.so' -path '*python3*/clutterscope/*' |
+        head -1)
       [ -n "$module" ] || fail "the runtime package has no Python module under usr/lib/python3*"
-      (cd "$scratch" && PYTHONPATH="$(dirname "$module")" /usr/bin/python3 -c \
+      (cd "$scratch" && PYTHONPATH="$(dirname "$(dirname "$module")")" /usr/bin/python3 -c \
         "import clutterscope, sys; print('python module', clutterscope.__file__); sys.exit(0 if clutterscope.__file__.startswith('$root') else 1)") ||
         fail "python3 -c 'import clutterscope' from the unpacked package"
     fi
