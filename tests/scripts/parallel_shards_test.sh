@@ -10,6 +10,8 @@ if ! command -v parallel >/dev/null; then
 fi
 scratch="$(mktemp -d)"
 trap 'rm -rf "$scratch"' EXIT
+# shellcheck source=tests/scripts/shard_recipes_common.sh
+# shellcheck source=tests/scripts/shard_recipes_common.sh
 . "$source_dir/tests/scripts/shard_recipes_common.sh"
 make_dataset_and_reference
 

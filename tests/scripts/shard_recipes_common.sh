@@ -1,3 +1,4 @@
+# shellcheck shell=bash disable=SC2154
 # Shared by the tests of scripts/slurm and scripts/parallel (sourced): a small generated
 # dataset, its unsharded report, and the byte comparison of a merged folder with it.
 # Expects $binary (the clutterscope executable) and $scratch (a temporary folder).

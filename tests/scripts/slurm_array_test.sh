@@ -52,6 +52,14 @@ cleanup() {
   stop_daemon "$cluster/slurmd.pid"
   stop_daemon "$cluster/slurmctld.pid"
   stop_daemon "$cluster/munge/munged.pid"
+  # A job step whose slurmd went first (a failed run) lingers: its slurmstepd keeps the node's
+  # log of this folder open.
+  local fd
+  for fd in /proc/[0-9]*/fd/*; do
+    case "$(readlink "$fd" 2>/dev/null)" in
+      "$cluster"/*) fd="${fd#/proc/}"; kill -KILL "${fd%%/*}" 2>/dev/null || true ;;
+    esac
+  done
   if [ -n "${CLUTTERSCOPE_TEST_KEEP:-}" ]; then echo "kept $scratch"; else rm -rf "$scratch"; fi
 }
 trap cleanup EXIT
@@ -111,6 +119,8 @@ done
 [ "$(sinfo -h -o %T 2>/dev/null)" = idle ] || fail "the node did not become idle: $(sinfo 2>&1)"
 
 scripts_dir="$source_dir/tests/scripts"
+# shellcheck source=tests/scripts/shard_recipes_common.sh
+# shellcheck source=tests/scripts/shard_recipes_common.sh
 . "$scripts_dir/shard_recipes_common.sh"
 step "node idle; generating the dataset and its unsharded report"
 make_dataset_and_reference
@@ -155,7 +165,7 @@ step "submitting"
 output="$(submit)" || fail "submit.sh: $output"
 array="$(sed -n 's/^array //p' <<<"$output")"
 merge="$(sed -n 's/^merge //p' <<<"$output")"
-[ -n "$array" ] && [ -n "$merge" ] || fail "no job ids in: $output"
+{ [ -n "$array" ] && [ -n "$merge" ]; } || fail "no job ids in: $output"
 
 deadline=$((SECONDS + 240))
 while [ ! -f "$scratch/frozen" ] && [ "$SECONDS" -lt "$deadline" ]; do sleep 0.1; done
