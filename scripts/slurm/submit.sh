@@ -58,6 +58,7 @@ for option in "$@"; do
   esac
 done
 [ -d "$dataset" ] || { echo "submit.sh: no dataset folder $dataset" >&2; exit 2; }
+command -v sbatch >/dev/null || { echo "submit.sh: sbatch not found (not a Slurm submit host?)" >&2; exit 2; }
 if [ -z "$binary" ]; then
   binary="$here/../../build/clutterscope"
   [ -x "$binary" ] || binary="$(command -v clutterscope || true)"
