@@ -110,6 +110,19 @@ NodeName=node0 NodeHostname=$(hostname -s) NodeAddr=127.0.0.1 CPUs=4 RealMemory=
 PartitionName=test Nodes=node0 Default=YES MaxTime=INFINITE State=UP
 CONF
 step "starting munged, slurmctld and slurmd"
+# slurmd 22.05 loads a cgroup plugin even with proctrack/linuxproc and task/none, and stops
+# when it finds no cgroup file system (a chroot) or a hybrid or undelegated one. A tmpfs as the
+# mount point makes it take cgroup/v1 there, and nothing of this cluster uses it.
+tmpfs=""
+for dir in /dev/shm /run; do
+  if [ "$(stat -f -c %T "$dir" 2>/dev/null)" = tmpfs ]; then tmpfs="$dir"; break; fi
+done
+[ -n "$tmpfs" ] || fail "neither /dev/shm nor /run is a tmpfs (slurmd's cgroup plugin needs one)"
+cat >"$cluster/cgroup.conf" <<CONF
+CgroupPlugin=cgroup/v1
+CgroupMountpoint=$tmpfs
+CgroupAutomount=no
+CONF
 slurmctld -c -f "$SLURM_CONF" || fail "slurmctld did not start"
 slurmd -N node0 -f "$SLURM_CONF" || fail "slurmd did not start"
 for _ in $(seq 300); do
