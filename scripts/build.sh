@@ -20,5 +20,5 @@ jobs="${CLUTTERSCOPE_BUILD_JOBS:-$(nproc)}"
 launcher=()
 if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DCLUTTERSCOPE_BUILD_TESTS="$tests" \
-  -DCLUTTERSCOPE_PYTHON="$python"   "${launcher[@]}" "$@" >/dev/null
+  -DCLUTTERSCOPE_PYTHON="$python" "${launcher[@]}" "$@" >/dev/null
 cmake --build build --parallel "$jobs"
