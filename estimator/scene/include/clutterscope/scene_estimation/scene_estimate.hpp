@@ -250,7 +250,8 @@ bool confident_at_radius(const ObjectEstimate& object, double radius_cm);
 // 000000 and 000003 (11 images, 33 estimated objects) as the smallest of 0, 0.5, ..., 6 mm whose
 // 95% ellipsoids cover >= 95% of the errors (0.67 at 2.5 mm, 0.97 at 3 mm), and checked on its
 // scenes 000001 and 000002 (10 images, 50 objects; other videos, no part in the choice): 95%
-// coverage 0.94 (0.22 without a misfit, 0.92 at 2 mm). scripts/choose_real_misfit.py repeats
+// coverage 0.92 (0.32 without a misfit, 0.92 at 2 mm; 2026-12-05, per-pixel fit information).
+// scripts/choose_real_misfit.py repeats
 // both from one `estimate --model-misfit-mm 0 --model-misfit-deg 0` run (defaults otherwise).
 constexpr double kMeasuredMisfitTranslationM = 0.003;
 constexpr double kMeasuredMisfitRotationDeg = 0.25;
