@@ -210,13 +210,12 @@ TEST(Nbp, AdaptiveProposalLoopyGrid2x2MatchesExactJointMarginals) {
 }
 
 TEST(Nbp, PerMessageProductsWithAPointwiseUnaryMissTheChainEvenWithTheAdaptiveProposal) {
-  // What the scene estimator runs today (mrf_builder.cpp: the default kProductWithoutReceiver
-  // messages, the adaptive belief proposal, a pointwise unary): each message's samples come
+  // What the scene estimator ran until issue 25 (the kProductWithoutReceiver messages with the
+  // adaptive belief proposal and a pointwise unary): each message's samples come
   // from its product without the receiver and only the unary's importance weights place them
   // (ESS ~1 of 100), so the chain's messages are biased, not only noisy: the mean over 20 runs
   // misses by ~0.57 sigma (0.48 at M = 200), against a sample-size tolerance of ~0.19. The
-  // belief-importance messages above meet it. Recorded here so that a change of the scene's
-  // proposal is a decision against a measured figure.
+  // belief-importance messages above meet it, which is why they are NbpOptions' default now.
   NbpOptions options = adaptive_options();
   options.message_proposal = MessageProposal::kProductWithoutReceiver;
   const LinearGaussianModel model = chain_model();
