@@ -15,6 +15,9 @@
 # same command again: every shard resumes its folder.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
+script=run.sh
+# shellcheck source=../lib/batch_args.sh
+source "$here/../lib/batch_args.sh"
 usage() {
   sed -n '6,13p' "$0" | sed 's/^# \{0,1\}//' >&2
   exit 2
@@ -33,28 +36,13 @@ done
 [ "$#" -ge 3 ] || usage
 command="$1" dataset="$2" work="$3"
 shift 3
-case "$command" in
-  report | visibility | estimate | evaluate) ;;
-  *) echo "run.sh: COMMAND must be report, visibility, estimate or evaluate, not $command" >&2
-     exit 2 ;;
-esac
-[[ "$shards" =~ ^[1-9][0-9]*$ ]] || { echo "run.sh: --shards must be >= 1, got $shards" >&2; exit 2; }
-[[ "$per_shard" =~ ^[1-9][0-9]*$ ]] ||
-  { echo "run.sh: --jobs-per-shard must be >= 1, got $per_shard" >&2; exit 2; }
-for option in "$@"; do
-  case "$option" in
-    --out | --out=* | --shard | --shard=* | -j | --jobs | --jobs=*)
-      echo "run.sh: $option is set by the script (WORK, --shards, --jobs-per-shard)" >&2
-      exit 2 ;;
-  esac
-done
+batch_check_command "$command"
+batch_check_count --shards "$shards"
+batch_check_count --jobs-per-shard "$per_shard"
+batch_refuse_set_options "WORK, --shards, --jobs-per-shard" "$@"
 command -v parallel >/dev/null ||
   { echo "run.sh: GNU parallel is missing (apt-get install parallel)" >&2; exit 2; }
-if [ -z "$binary" ]; then
-  binary="$here/../../build/clutterscope"
-  [ -x "$binary" ] || binary="$(command -v clutterscope || true)"
-fi
-[ -x "$binary" ] || { echo "run.sh: no clutterscope executable (--binary PATH)" >&2; exit 2; }
+binary="$(batch_find_binary "$binary")"
 mkdir -p "$work/shards"
 
 # {} is the shard index, 0-based as --shard. --halt never: every shard runs to its end, so a

@@ -25,6 +25,9 @@
 # shards take seconds).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
+script=submit.sh
+# shellcheck source=../lib/batch_args.sh
+source "$here/../lib/batch_args.sh"
 usage() {
   sed -n '6,18p' "$0" | sed 's/^# \{0,1\}//' >&2
   exit 2
@@ -43,27 +46,13 @@ done
 [ "$#" -ge 3 ] || usage
 command="$1" dataset="$2" work="$3"
 shift 3
-case "$command" in
-  report | visibility | estimate | evaluate) ;;
-  *) echo "submit.sh: COMMAND must be report, visibility, estimate or evaluate, not $command" >&2
-     exit 2 ;;
-esac
-[[ "$shards" =~ ^[1-9][0-9]*$ ]] || { echo "submit.sh: --shards must be >= 1, got $shards" >&2; exit 2; }
-[[ "$cpus" =~ ^[1-9][0-9]*$ ]] || { echo "submit.sh: --cpus must be >= 1, got $cpus" >&2; exit 2; }
-for option in "$@"; do
-  case "$option" in
-    --out | --out=* | --shard | --shard=* | -j | --jobs | --jobs=*)
-      echo "submit.sh: $option is set by the scripts (WORK, --shards, --cpus)" >&2
-      exit 2 ;;
-  esac
-done
+batch_check_command "$command"
+batch_check_count --shards "$shards"
+batch_check_count --cpus "$cpus"
+batch_refuse_set_options "WORK, --shards, --cpus" "$@"
 [ -d "$dataset" ] || { echo "submit.sh: no dataset folder $dataset" >&2; exit 2; }
 command -v sbatch >/dev/null || { echo "submit.sh: sbatch not found (not a Slurm submit host?)" >&2; exit 2; }
-if [ -z "$binary" ]; then
-  binary="$here/../../build/clutterscope"
-  [ -x "$binary" ] || binary="$(command -v clutterscope || true)"
-fi
-[ -x "$binary" ] || { echo "submit.sh: no clutterscope executable (--binary PATH)" >&2; exit 2; }
+binary="$(batch_find_binary "$binary")"
 # The jobs run elsewhere, maybe in another folder: absolute paths.
 binary="$(realpath "$binary")"
 dataset="$(realpath "$dataset")"

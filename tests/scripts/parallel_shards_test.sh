@@ -11,9 +11,9 @@ fi
 scratch="$(mktemp -d)"
 trap 'rm -rf "$scratch"' EXIT
 # shellcheck source=tests/scripts/shard_recipes_common.sh
-# shellcheck source=tests/scripts/shard_recipes_common.sh
 . "$source_dir/tests/scripts/shard_recipes_common.sh"
 make_dataset_and_reference
+expect_usage_errors "$source_dir/scripts/parallel/run.sh" --jobs-per-shard
 
 # An interrupted run: shard 1 alone, killed once its first image is done.
 "$binary" report "$scratch/data" --out "$scratch/work/shards/1" --shard 1/4 --jobs 1 \

@@ -29,3 +29,32 @@ expect_same_as_reference() {
   [ "$count" -ge 20 ] || { echo "FAIL: only $count files in the reference" >&2; return 1; }
   echo "ok: $merged equals the unsharded run byte for byte ($count files)"
 }
+
+# The usage errors both recipes share (scripts/lib/batch_args.sh): each exits 2 before
+# anything runs and names what was wrong. expect_usage_errors SCRIPT COUNT_OPTION
+expect_usage_errors() {
+  local script="$1" count_option="$2" status
+  expect_refused() {
+    local expected="$1"
+    shift
+    status=0
+    bash "$script" "$@" >"$scratch/usage.log" 2>&1 || status=$?
+    if [ "$status" -ne 2 ] || ! grep -qF -- "$expected" "$scratch/usage.log"; then
+      cat "$scratch/usage.log" >&2
+      echo "FAIL: $(basename "$script") $* exited $status, expected 2 and \"$expected\"" >&2
+      return 1
+    fi
+  }
+  expect_refused "COMMAND must be report, visibility, estimate or evaluate, not frobnicate" \
+    --binary "$binary" frobnicate "$scratch/data" "$scratch/usage-work"
+  expect_refused "--shards must be >= 1, got 0" \
+    --shards 0 --binary "$binary" report "$scratch/data" "$scratch/usage-work"
+  expect_refused "$count_option must be >= 1, got x" \
+    "$count_option" x --binary "$binary" report "$scratch/data" "$scratch/usage-work"
+  expect_refused "--jobs=3 is set by the script" \
+    --binary "$binary" report "$scratch/data" "$scratch/usage-work" --jobs=3
+  expect_refused "no clutterscope executable (--binary PATH)" \
+    --binary "$scratch/no-such-binary" report "$scratch/data" "$scratch/usage-work"
+  [ ! -e "$scratch/usage-work" ] || { echo "FAIL: a refused run created its WORK folder" >&2; return 1; }
+  echo "ok: $(basename "$script") refuses bad arguments with exit 2"
+}

@@ -133,10 +133,10 @@ done
 
 scripts_dir="$source_dir/tests/scripts"
 # shellcheck source=tests/scripts/shard_recipes_common.sh
-# shellcheck source=tests/scripts/shard_recipes_common.sh
 . "$scripts_dir/shard_recipes_common.sh"
 step "node idle; generating the dataset and its unsharded report"
 make_dataset_and_reference
+expect_usage_errors "$source_dir/scripts/slurm/submit.sh" --cpus
 
 # Task 1's first run runs clutterscope and freezes it (SIGSTOP) once it has finished an image,
 # so that the requeue below kills it midway on any machine; every other run is clutterscope.
