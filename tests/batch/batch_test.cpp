@@ -21,15 +21,8 @@ using testing::fake_final_files;
 using testing::fake_job;
 using testing::FakeJobOptions;
 using testing::fresh_dir;
+using testing::quiet_batch_options;
 using testing::read_file;
-
-BatchOptions options_for(const fs::path& out, int jobs) {
-  BatchOptions options;
-  options.out_dir = out;
-  options.jobs = jobs;
-  options.quiet = true;
-  return options;
-}
 
 void expect_same_final_files(const fs::path& expected, const fs::path& actual) {
   for (const std::string& name : fake_final_files()) {
@@ -63,7 +56,7 @@ TEST(Batch, WritesTablesInItemOrderWithHeaders) {
   FakeJobOptions fake;
   fake.scenes = 2;
   fake.images_per_scene = 5;
-  const BatchResult result = run_batch(fake_job(out, fake), options_for(out, 2));
+  const BatchResult result = run_batch(fake_job(out, fake), quiet_batch_options(out, 2));
   EXPECT_TRUE(result.complete);
   EXPECT_EQ(result.computed, 10u);
   EXPECT_EQ(result.exit_code(), 0);
@@ -95,11 +88,11 @@ TEST(Batch, JobsOneAndTwoGiveIdenticalBytes) {
   fake.images_per_scene = 50;
   fake.max_delay_us = 300;  // workers finish out of order
   const fs::path one = fresh_dir("jobs1"), two = fresh_dir("jobs2");
-  run_batch(fake_job(one, fake), options_for(one, 1));
-  run_batch(fake_job(two, fake), options_for(two, 2));
+  run_batch(fake_job(one, fake), quiet_batch_options(one, 1));
+  run_batch(fake_job(two, fake), quiet_batch_options(two, 2));
   expect_same_final_files(one, two);
   const fs::path three = fresh_dir("jobs3");
-  run_batch(fake_job(three, fake), options_for(three, 3));
+  run_batch(fake_job(three, fake), quiet_batch_options(three, 3));
   expect_same_final_files(one, three);
 }
 
@@ -112,14 +105,14 @@ TEST(Batch, ResumeAfterKill9GivesIdenticalBytes) {
   {
     FakeJobOptions fast = fake;
     fast.max_delay_us = 0;  // the delay does not change results, only timing
-    run_batch(fake_job(reference, fast), options_for(reference, 2));
+    run_batch(fake_job(reference, fast), quiet_batch_options(reference, 2));
   }
   const fs::path out = fresh_dir("resume_killed");
   const pid_t child = ::fork();
   ASSERT_GE(child, 0);
   if (child == 0) {
     try {
-      run_batch(fake_job(out, fake), options_for(out, 2));
+      run_batch(fake_job(out, fake), quiet_batch_options(out, 2));
     } catch (...) {
       ::_exit(3);
     }
@@ -147,14 +140,14 @@ TEST(Batch, ResumeAfterKill9GivesIdenticalBytes) {
 
   FakeJobOptions fast = fake;
   fast.max_delay_us = 0;
-  const BatchResult resumed = run_batch(fake_job(out, fast), options_for(out, 2));
+  const BatchResult resumed = run_batch(fake_job(out, fast), quiet_batch_options(out, 2));
   EXPECT_TRUE(resumed.complete);
   EXPECT_EQ(resumed.resumed, done_before);
   EXPECT_EQ(resumed.computed + resumed.resumed, 400u);
   expect_same_final_files(reference, out);
 
   // Running a finished job again computes nothing and rewrites the same bytes.
-  const BatchResult again = run_batch(fake_job(out, fast), options_for(out, 1));
+  const BatchResult again = run_batch(fake_job(out, fast), quiet_batch_options(out, 1));
   EXPECT_EQ(again.computed, 0u);
   EXPECT_EQ(again.resumed, 400u);
   expect_same_final_files(reference, out);
@@ -165,23 +158,23 @@ TEST(Batch, ResumeRecomputesTheItemsWhoseInputsChanged) {
   fake.scenes = 3;
   fake.images_per_scene = 20;
   const fs::path out = fresh_dir("inputs_changed");
-  run_batch(fake_job(out, fake), options_for(out, 2));
+  run_batch(fake_job(out, fake), quiet_batch_options(out, 2));
   const std::string before = read_file(out / "a.csv");
 
   FakeJobOptions edited = fake;
   edited.input_versions = {{2, 1}};  // scene 2's inputs changed: its values change
-  const BatchResult result = run_batch(fake_job(out, edited), options_for(out, 2));
+  const BatchResult result = run_batch(fake_job(out, edited), quiet_batch_options(out, 2));
   EXPECT_TRUE(result.complete);
   EXPECT_EQ(result.changed, 20u);
   EXPECT_EQ(result.computed, 20u);
   EXPECT_EQ(result.resumed, 40u);
   EXPECT_NE(read_file(out / "a.csv"), before);
   const fs::path fresh = fresh_dir("inputs_changed_fresh");
-  run_batch(fake_job(fresh, edited), options_for(fresh, 1));
+  run_batch(fake_job(fresh, edited), quiet_batch_options(fresh, 1));
   expect_same_final_files(fresh, out);
 
   // Unchanged inputs: everything resumes.
-  const BatchResult again = run_batch(fake_job(out, edited), options_for(out, 1));
+  const BatchResult again = run_batch(fake_job(out, edited), quiet_batch_options(out, 1));
   EXPECT_EQ(again.changed, 0u);
   EXPECT_EQ(again.resumed, 60u);
   expect_same_final_files(fresh, out);
@@ -192,12 +185,12 @@ TEST(Batch, AChangedItemThatNowFailsDoesNotKeepItsOldResult) {
   fake.scenes = 2;
   fake.images_per_scene = 10;
   const fs::path out = fresh_dir("changed_fails");
-  run_batch(fake_job(out, fake), options_for(out, 1));
+  run_batch(fake_job(out, fake), quiet_batch_options(out, 1));
 
   FakeJobOptions edited = fake;
   edited.input_versions = {{1, 1}};
   edited.fail_modulo = 5;  // images 1 and 6 of every scene now fail when computed
-  BatchOptions options = options_for(out, 2);
+  BatchOptions options = quiet_batch_options(out, 2);
   options.keep_going = true;
   const BatchResult result = run_batch(fake_job(out, edited), options);
   EXPECT_EQ(result.changed, 10u);
@@ -214,7 +207,7 @@ TEST(Batch, AFailedItemIsNotCountedAsComputed) {
   fake.images_per_scene = 6;
   fake.fail_modulo = 5;  // image 1 fails
   const fs::path out = fresh_dir("failed_not_computed");
-  BatchOptions options = options_for(out, 2);
+  BatchOptions options = quiet_batch_options(out, 2);
   options.keep_going = true;
   const BatchResult result = run_batch(fake_job(out, fake), options);
   EXPECT_EQ(result.failed, 1u);
@@ -231,7 +224,7 @@ TEST(Batch, RunJsonRecordsVersionAndCommit) {
   fake.scenes = 1;
   fake.images_per_scene = 2;
   const fs::path out = fresh_dir("run_json_commit");
-  run_batch(fake_job(out, fake), options_for(out, 1));
+  run_batch(fake_job(out, fake), quiet_batch_options(out, 1));
   for (int pass = 0; pass < 2; ++pass) {
     const auto run = nlohmann::json::parse(read_file(out / "run.json"));
     EXPECT_EQ(run.at("tool_version"), CLUTTERSCOPE_VERSION);
@@ -253,12 +246,12 @@ TEST(Batch, ShardsMergeToTheBytesOfOneRun) {
   fake.images_per_scene = 31;
   fake.write_files = true;
   const fs::path whole = fresh_dir("shard_whole");
-  run_batch(fake_job(whole, fake), options_for(whole, 2));
+  run_batch(fake_job(whole, fake), quiet_batch_options(whole, 2));
 
   std::vector<fs::path> shard_dirs;
   for (int i = 0; i < 3; ++i) {
     const fs::path dir = fresh_dir("shard_" + std::to_string(i));
-    BatchOptions options = options_for(dir, 1 + i % 2);
+    BatchOptions options = quiet_batch_options(dir, 1 + i % 2);
     options.shard = Shard{i, 3};
     const BatchResult result = run_batch(fake_job(dir, fake), options);
     EXPECT_FALSE(result.complete);
@@ -285,7 +278,7 @@ TEST(Batch, ShardsMergeToTheBytesOfOneRun) {
     EXPECT_EQ(read_file(whole / name), read_file(merged / name));
   }
   // The merged folder is a complete batch folder: a run into it computes nothing.
-  const BatchResult rerun = run_batch(fake_job(merged, fake), options_for(merged, 2));
+  const BatchResult rerun = run_batch(fake_job(merged, fake), quiet_batch_options(merged, 2));
   EXPECT_EQ(rerun.computed, 0u);
   expect_same_final_files(whole, merged);
 }
@@ -295,7 +288,7 @@ TEST(Batch, MergeReportsMissingItems) {
   fake.scenes = 2;
   fake.images_per_scene = 10;
   const fs::path shard0 = fresh_dir("missing_0");
-  BatchOptions options = options_for(shard0, 1);
+  BatchOptions options = quiet_batch_options(shard0, 1);
   options.shard = Shard{0, 2};
   run_batch(fake_job(shard0, fake), options);
   MergeOptions merge;
@@ -320,7 +313,7 @@ TEST(Batch, MergeRefusesACommandNotListed) {
   fake.scenes = 1;
   fake.images_per_scene = 2;
   const fs::path whole = fresh_dir("unlisted_whole");
-  run_batch(fake_job(whole, fake), options_for(whole, 1));
+  run_batch(fake_job(whole, fake), quiet_batch_options(whole, 1));
   MergeOptions merge;
   merge.inputs = {whole};
   merge.out_dir = fresh_dir("unlisted_out");
@@ -345,7 +338,7 @@ TEST(Batch, MergeRefusesAFolderWithoutTheRequiredOptions) {
   fake.scenes = 1;
   fake.images_per_scene = 2;
   const fs::path old = fresh_dir("required_old");
-  run_batch(fake_job(old, fake), options_for(old, 1));
+  run_batch(fake_job(old, fake), quiet_batch_options(old, 1));
   BatchOutputSpec newer = testing::fake_output();
   newer.required_options = {{"covariance", "full"}};
   MergeOptions merge;
@@ -372,9 +365,9 @@ TEST(Batch, ShardsSharingOneFolderFinalizeWhenComplete) {
   fake.scenes = 2;
   fake.images_per_scene = 15;
   const fs::path whole = fresh_dir("shared_whole");
-  run_batch(fake_job(whole, fake), options_for(whole, 1));
+  run_batch(fake_job(whole, fake), quiet_batch_options(whole, 1));
   const fs::path shared = fresh_dir("shared");
-  BatchOptions options = options_for(shared, 2);
+  BatchOptions options = quiet_batch_options(shared, 2);
   options.shard = Shard{1, 2};
   EXPECT_FALSE(run_batch(fake_job(shared, fake), options).complete);
   options.shard = Shard{0, 2};
@@ -387,13 +380,13 @@ TEST(Batch, DifferentJobInTheSameFolderIsRefused) {
   fake.scenes = 1;
   fake.images_per_scene = 4;
   const fs::path out = fresh_dir("fingerprint");
-  run_batch(fake_job(out, fake), options_for(out, 1));
+  run_batch(fake_job(out, fake), quiet_batch_options(out, 1));
   const std::string before = read_file(out / "a.csv");
 
   FakeJobOptions other = fake;
   other.option = "b";
   try {
-    run_batch(fake_job(out, other), options_for(out, 1));
+    run_batch(fake_job(out, other), quiet_batch_options(out, 1));
     FAIL() << "a different fingerprint must be refused";
   } catch (const UsageError& error) {
     const std::string message = error.what();
@@ -403,12 +396,12 @@ TEST(Batch, DifferentJobInTheSameFolderIsRefused) {
   }
   FakeJobOptions more_images = fake;
   more_images.images_per_scene = 5;
-  EXPECT_THROW(run_batch(fake_job(out, more_images), options_for(out, 1)), UsageError);
+  EXPECT_THROW(run_batch(fake_job(out, more_images), quiet_batch_options(out, 1)), UsageError);
   EXPECT_EQ(read_file(out / "a.csv"), before) << "a refused job must not touch the folder";
 
   // Shards of different jobs cannot be merged either.
   const fs::path other_dir = fresh_dir("fingerprint_other");
-  run_batch(fake_job(other_dir, other), options_for(other_dir, 1));
+  run_batch(fake_job(other_dir, other), quiet_batch_options(other_dir, 1));
   MergeOptions merge;
   merge.inputs = {out, other_dir};
   merge.out_dir = fresh_dir("fingerprint_merge");
@@ -425,7 +418,7 @@ TEST(Batch, KeepGoingRecordsFailuresAndExitsOne) {
   fake.images_per_scene = 12;
   fake.fail_modulo = 5;  // images 1, 6, 11 of each scene fail
   const fs::path out = fresh_dir("keep_going");
-  BatchOptions options = options_for(out, 2);
+  BatchOptions options = quiet_batch_options(out, 2);
   options.keep_going = true;
   const BatchResult result = run_batch(fake_job(out, fake), options);
   EXPECT_TRUE(result.complete);
@@ -460,7 +453,7 @@ TEST(Batch, WithoutKeepGoingTheFirstFailureAbortsAndNamesTheImage) {
   fake.fail_modulo = 20;  // image 1 and 21 fail
   const fs::path out = fresh_dir("abort");
   try {
-    run_batch(fake_job(out, fake), options_for(out, 2));
+    run_batch(fake_job(out, fake), quiet_batch_options(out, 2));
     FAIL() << "expected a DatasetError";
   } catch (const datasets::DatasetError& error) {
     const std::string message = error.what();
@@ -470,11 +463,11 @@ TEST(Batch, WithoutKeepGoingTheFirstFailureAbortsAndNamesTheImage) {
   // After the data is fixed (here: no more failures), the run resumes and completes.
   FakeJobOptions fixed = fake;
   fixed.fail_modulo = 0;
-  const BatchResult result = run_batch(fake_job(out, fixed), options_for(out, 2));
+  const BatchResult result = run_batch(fake_job(out, fixed), quiet_batch_options(out, 2));
   EXPECT_TRUE(result.complete);
   EXPECT_GE(result.computed, 2u);
   const fs::path reference = fresh_dir("abort_reference");
-  run_batch(fake_job(reference, fixed), options_for(reference, 1));
+  run_batch(fake_job(reference, fixed), quiet_batch_options(reference, 1));
   expect_same_final_files(reference, out);
 }
 
@@ -482,7 +475,7 @@ TEST(Batch, RenderErrorsAbortEvenWithKeepGoing) {
   FakeJobOptions fake;
   fake.render_error = true;
   const fs::path out = fresh_dir("render_error");
-  BatchOptions options = options_for(out, 2);
+  BatchOptions options = quiet_batch_options(out, 2);
   options.keep_going = true;
   EXPECT_THROW(run_batch(fake_job(out, fake), options), testing::FakeRenderError);
   EXPECT_FALSE(fs::exists(out / "a.csv"));
@@ -505,7 +498,7 @@ TEST(Batch, ResultsAreNotHeldInMemory) {
       fake.images_per_scene = 1000;
       fake.padding_bytes = 4000;
       const long rss_before = status_kib("VmRSS");
-      const BatchResult result = run_batch(fake_job(out, fake), options_for(out, 2));
+      const BatchResult result = run_batch(fake_job(out, fake), quiet_batch_options(out, 2));
       const long peak = status_kib("VmHWM");
       if (result.complete && result.computed == 10000 &&
           fs::file_size(out / "a.csv") > 40'000'000) {

@@ -17,15 +17,8 @@ using testing::fake_final_files;
 using testing::fake_job;
 using testing::FakeJobOptions;
 using testing::fresh_dir;
+using testing::quiet_batch_options;
 using testing::read_file;
-
-BatchOptions quiet_options(const fs::path& out, int jobs) {
-  BatchOptions options;
-  options.out_dir = out;
-  options.jobs = jobs;
-  options.quiet = true;
-  return options;
-}
 
 std::size_t count_parts(const fs::path& out) {
   std::size_t count = 0;
@@ -61,9 +54,9 @@ struct CancelAfter {
 
 TEST(BatchCancel, StopsBetweenItemsAndARerunResumesToTheBytesOfOneRun) {
   const fs::path whole = fresh_dir("cancel_whole"), out = fresh_dir("cancel_resumed");
-  run_batch(fake_job(whole, small_job()), quiet_options(whole, 1));
+  run_batch(fake_job(whole, small_job()), quiet_batch_options(whole, 1));
 
-  BatchOptions options = quiet_options(out, 1);
+  BatchOptions options = quiet_batch_options(out, 1);
   CancelAfter cancel(3);
   cancel.attach(&options);
   try {
@@ -79,7 +72,7 @@ TEST(BatchCancel, StopsBetweenItemsAndARerunResumesToTheBytesOfOneRun) {
   EXPECT_EQ(count_parts(out), 3u);
   for (const std::string& name : fake_final_files()) EXPECT_FALSE(fs::exists(out / name)) << name;
 
-  const BatchResult rerun = run_batch(fake_job(out, small_job()), quiet_options(out, 1));
+  const BatchResult rerun = run_batch(fake_job(out, small_job()), quiet_batch_options(out, 1));
   EXPECT_TRUE(rerun.complete);
   EXPECT_EQ(rerun.resumed, 3u);
   EXPECT_EQ(rerun.computed, 7u);
@@ -93,15 +86,15 @@ TEST(BatchCancel, WithTwoWorkersTheRunningItemsFinishAndTheRerunCompletes) {
   fake.images_per_scene = 20;
   fake.max_delay_us = 300;
   const fs::path whole = fresh_dir("cancel2_whole"), out = fresh_dir("cancel2_resumed");
-  run_batch(fake_job(whole, fake), quiet_options(whole, 2));
-  BatchOptions options = quiet_options(out, 2);
+  run_batch(fake_job(whole, fake), quiet_batch_options(whole, 2));
+  BatchOptions options = quiet_batch_options(out, 2);
   CancelAfter cancel(5);
   cancel.attach(&options);
   EXPECT_THROW(run_batch(fake_job(out, fake), options), Cancelled);
   // The cancel is seen before the next item: at most one more item per worker finishes.
   EXPECT_GE(count_parts(out), 5u);
   EXPECT_LE(count_parts(out), 6u);
-  const BatchResult rerun = run_batch(fake_job(out, fake), quiet_options(out, 2));
+  const BatchResult rerun = run_batch(fake_job(out, fake), quiet_batch_options(out, 2));
   EXPECT_EQ(rerun.resumed + rerun.computed, 40u);
   for (const std::string& name : fake_final_files()) {
     EXPECT_EQ(read_file(whole / name), read_file(out / name)) << name << " differs";
@@ -110,7 +103,7 @@ TEST(BatchCancel, WithTwoWorkersTheRunningItemsFinishAndTheRerunCompletes) {
 
 TEST(BatchCancel, ACancelBeforeTheRunComputesNothing) {
   const fs::path out = fresh_dir("cancel_before");
-  BatchOptions options = quiet_options(out, 2);
+  BatchOptions options = quiet_batch_options(out, 2);
   std::atomic<bool> cancelled{true};
   options.cancel = &cancelled;
   EXPECT_THROW(run_batch(fake_job(out, small_job()), options), Cancelled);
@@ -119,8 +112,8 @@ TEST(BatchCancel, ACancelBeforeTheRunComputesNothing) {
 
 TEST(BatchCancel, ACancelWithNothingLeftToDoCompletes) {
   const fs::path out = fresh_dir("cancel_nothing_left");
-  run_batch(fake_job(out, small_job()), quiet_options(out, 1));
-  BatchOptions options = quiet_options(out, 1);
+  run_batch(fake_job(out, small_job()), quiet_batch_options(out, 1));
+  BatchOptions options = quiet_batch_options(out, 1);
   std::atomic<bool> cancelled{true};
   options.cancel = &cancelled;
   const BatchResult result = run_batch(fake_job(out, small_job()), options);
@@ -130,7 +123,7 @@ TEST(BatchCancel, ACancelWithNothingLeftToDoCompletes) {
 
 TEST(BatchProgress, CountsEveryItemOfTheScopeResumedOnesIncluded) {
   const fs::path out = fresh_dir("progress_counts");
-  BatchOptions options = quiet_options(out, 2);
+  BatchOptions options = quiet_batch_options(out, 2);
   CancelAfter cancel(4);
   cancel.attach(&options);
   EXPECT_THROW(run_batch(fake_job(out, small_job()), options), Cancelled);
@@ -140,7 +133,7 @@ TEST(BatchProgress, CountsEveryItemOfTheScopeResumedOnesIncluded) {
     EXPECT_EQ(cancel.calls[i].second, 10u);
   }
   const std::size_t kept = count_parts(out);
-  BatchOptions rerun = quiet_options(out, 2);
+  BatchOptions rerun = quiet_batch_options(out, 2);
   CancelAfter watch(1000);
   watch.attach(&rerun);
   run_batch(fake_job(out, small_job()), rerun);
@@ -151,7 +144,7 @@ TEST(BatchProgress, CountsEveryItemOfTheScopeResumedOnesIncluded) {
 
 TEST(BatchResults, KeptInMemoryTheyAreTheBytesOfTheFiles) {
   const fs::path out = fresh_dir("keep_results");
-  BatchOptions options = quiet_options(out, 2);
+  BatchOptions options = quiet_batch_options(out, 2);
   options.keep_results = true;
   const BatchResult result = run_batch(fake_job(out, small_job()), options);
   ASSERT_EQ(result.tables.size(), 2u);
@@ -167,7 +160,7 @@ TEST(BatchResults, KeptInMemoryTheyAreTheBytesOfTheFiles) {
 
 TEST(BatchResults, NotKeptByDefault) {
   const fs::path out = fresh_dir("keep_results_off");
-  const BatchResult result = run_batch(fake_job(out, small_job()), quiet_options(out, 1));
+  const BatchResult result = run_batch(fake_job(out, small_job()), quiet_batch_options(out, 1));
   EXPECT_TRUE(result.tables.empty());
   EXPECT_TRUE(result.summary.is_null());
 }

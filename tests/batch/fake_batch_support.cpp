@@ -165,4 +165,12 @@ std::vector<std::string> fake_final_files() {
   return {"a.csv", "b.csv", "summary.json", "extra/scenes.txt"};
 }
 
+BatchOptions quiet_batch_options(const std::filesystem::path& out_dir, int jobs) {
+  BatchOptions options;
+  options.out_dir = out_dir;
+  options.jobs = jobs;
+  options.quiet = true;
+  return options;
+}
+
 }  // namespace clutterscope::batch::testing

@@ -49,4 +49,7 @@ using clutterscope::testing::read_file;
 // The final files a fake job writes, for byte comparisons.
 std::vector<std::string> fake_final_files();
 
+// Options of a batch run into `out_dir` with `jobs` workers and no progress lines.
+BatchOptions quiet_batch_options(const std::filesystem::path& out_dir, int jobs);
+
 }  // namespace clutterscope::batch::testing
