@@ -1,13 +1,9 @@
 #include <algorithm>
 #include <clutterscope/batch/formats.hpp>
-#include <clutterscope/batch/input_digest.hpp>
-#include <clutterscope/batch/run_record.hpp>
 #include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/estimator/confidence.hpp>
 #include <clutterscope/jobs/estimate_job.hpp>
-#include <clutterscope/render/context.hpp>
-#include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/report/calibration.hpp>
 #include <cmath>
 #include <cstdint>
@@ -19,6 +15,8 @@
 #include <set>
 #include <string>
 #include <vector>
+
+#include "image_batch.hpp"
 
 namespace clutterscope::jobs {
 
@@ -444,25 +442,18 @@ JobSummary run_estimate(const EstimateJobOptions& options, const RunControl& con
   datasets::BopDataset dataset = batch::open_dataset(job_options.dataset);
   if (job_options.detections == kSyntheticDetections) job_options.detections.clear();
   if (!job_options.detections.empty()) dataset.attach_detections(job_options.detections);
-  batch::BatchJob job;
   const batch::BatchOutputSpec output = estimate_output_spec();
-  job.output = &output;
-  job.items = batch::list_selected_images(dataset, job_options.dataset);
+  batch::BatchJob job = image_batch_job(dataset, job_options.dataset, output);
   job.fingerprint = estimate_job_fingerprint(job_options, dataset);
-  job.input_digest = batch::bop_image_digest(dataset);
   job.make_worker = [&dataset, &job_options]() -> batch::ItemFunction {
     auto worker = std::make_shared<EstimateWorker>(dataset, job_options);
     return [worker](const datasets::ImageKey& key) { return worker->run(key); };
   };
-  // Set before the workers create their GL contexts (see render/context.hpp).
-  const render::WorkerRasterisationScope rasterisation;
-  batch::BatchResult result = batch::run_batch(
-      job, control.apply(batch::batch_options_of(job_options.dataset, "estimate"), "estimate"));
-  batch::record_renderer(job_options.dataset.out, render::renderer_in_use());
+  JobSummary summary = run_rendering_job(job, job_options.dataset, "estimate", control);
   if (job_options.detections.empty() && !job_options.dataset.quiet) {
     std::fprintf(stderr, "%s\n", synthetic_detections_note(job.items).c_str());
   }
-  return job_summary(output, job_options.dataset.out, std::move(result));
+  return summary;
 }
 
 batch::BatchResult run_estimate_job(const EstimateJobOptions& options) {

@@ -1,8 +1,6 @@
 #include <algorithm>
 #include <clutterscope/batch/formats.hpp>
-#include <clutterscope/batch/input_digest.hpp>
 #include <clutterscope/batch/quantile.hpp>
-#include <clutterscope/batch/run_record.hpp>
 #include <clutterscope/batch/table_layouts.hpp>
 #include <clutterscope/datasets/bop.hpp>
 #include <clutterscope/datasets/errors.hpp>
@@ -11,7 +9,6 @@
 #include <clutterscope/render/bop_renderer.hpp>
 #include <clutterscope/render/context.hpp>
 #include <clutterscope/render/renderer.hpp>
-#include <clutterscope/render/renderer_in_use.hpp>
 #include <clutterscope/visibility/overlay.hpp>
 #include <clutterscope/visibility/scene_gt_info.hpp>
 #include <cmath>
@@ -24,6 +21,8 @@
 #include <optional>
 #include <string>
 #include <vector>
+
+#include "image_batch.hpp"
 
 namespace clutterscope::jobs {
 
@@ -526,22 +525,14 @@ JobSummary run_visibility(const VisibilityJobOptions& options, const RunControl&
   if (!options.IsValid(&why)) throw batch::UsageError(why);
   const datasets::BopDataset dataset = batch::open_dataset(options.dataset);
   const batch::BatchOutputSpec output = visibility_output_spec();
-  batch::BatchJob job;
-  job.output = &output;
-  job.items = batch::list_selected_images(dataset, options.dataset);
+  batch::BatchJob job = image_batch_job(dataset, options.dataset, output);
   job.fingerprint = visibility_job_fingerprint(options);
-  job.input_digest = batch::bop_image_digest(dataset);
   SharedModels models(dataset);
   job.make_worker = [&dataset, &options, &models]() -> batch::ItemFunction {
     auto worker = std::make_shared<VisibilityWorker>(dataset, options, models);
     return [worker](const datasets::ImageKey& key) { return worker->run(key); };
   };
-  // Set before the workers create their GL contexts (see render/context.hpp).
-  const render::WorkerRasterisationScope rasterisation;
-  batch::BatchResult result = batch::run_batch(
-      job, control.apply(batch::batch_options_of(options.dataset, "visibility"), "visibility"));
-  batch::record_renderer(options.dataset.out, render::renderer_in_use());
-  return job_summary(output, options.dataset.out, std::move(result));
+  return run_rendering_job(job, options.dataset, "visibility", control);
 }
 
 batch::BatchResult run_visibility_job(const VisibilityJobOptions& options) {
