@@ -149,10 +149,12 @@ TEST(SimulateGl, Tray10PaperThresholdEmptiesTheTrayAndALooserOneIsCompared) {
 // Issue 25, the paper's Fig. 6 claim as a rate over seeds: tray6 scene 2 (6 objects, one
 // completely hidden) at the estimator's defaults. Scene 2 was chosen at seed 1 among the six
 // tray6 scenes as one where a looser threshold picks wrongly (scenes 1-4 do at 4 or 25 cm^2, 0
-// and 5 do not); seeds 2-8 were measured after that choice. Measured: at 0.25 cm^2 the tray is
-// emptied without a wrong pick at 6 of 8 seeds (seed 4: one confident estimate off by more than
-// 2 cm; seed 5: nothing confident in round 1, no progress); at 4 cm^2 every seed makes wrong
-// picks (14 in all, 1 at 0.25 cm^2); about 60 s on two busy cores.
+// and 5 do not); seeds 2-8 were measured after that choice. Measured with the per-message
+// products: at 0.25 cm^2 the tray is emptied without a wrong pick at 6 of 8 seeds (seed 4: one
+// confident estimate off by more than 2 cm; seed 5: nothing confident in round 1, no progress);
+// at 4 cm^2 every seed makes wrong picks (14 in all, 1 at 0.25 cm^2). With belief-importance
+// messages (2026-12-05): 7 of 8, every seed wrong at 4 cm^2, 13 wrong picks against 0. About
+// 30-60 s on two busy cores.
 TEST(SimulateGl, PaperThresholdUnloadsWithoutWrongPicksWhereALooserOneMakesThemOverSeeds) {
   std::string why;
   if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
