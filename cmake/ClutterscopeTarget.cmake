@@ -38,7 +38,7 @@ endfunction()
 # One library per top-level folder: sources are every src/*.cpp, public headers live in
 # include/clutterscope/<folder>/. New files are picked up without editing CMake.
 function(clutterscope_add_library name)
-  cmake_parse_arguments(ARG "" "" "PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "NO_UNITY_BUILD" "" "PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
   file(GLOB_RECURSE sources CONFIGURE_DEPENDS "${CMAKE_CURRENT_SOURCE_DIR}/src/*.cpp")
   if(NOT sources)
     # A folder with headers only so far.
@@ -61,6 +61,18 @@ function(clutterscope_add_library name)
     set_target_properties(clutterscope_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
   endif()
   clutterscope_configure_target(clutterscope_${name})
+  if(CLUTTERSCOPE_UNITY_BUILD AND NOT ARG_NO_UNITY_BUILD)
+    # One translation unit per library: each .cpp parses nlohmann/json, CLI11, Eigen or OpenCV,
+    # and their inline templates are compiled once per library instead of once per file. Batch
+    # size 0 puts every file of the library in the one unit, so which files share a unit never
+    # changes with the number of files.
+    set_target_properties(clutterscope_${name} PROPERTIES UNITY_BUILD ON UNITY_BUILD_BATCH_SIZE 0)
+    # GCC takes every included file for a header, and warns when a class defined there (a
+    # State of a .cpp's pimpl) has a member of an anonymous-namespace type; in the unit, each
+    # .cpp is an included file.
+    target_compile_options(clutterscope_${name} PRIVATE
+                           $<$<CXX_COMPILER_ID:GNU>:-Wno-subobject-linkage>)
+  endif()
   _clutterscope_register_library(${name})
 endfunction()
 

@@ -3,11 +3,11 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "pi.hpp"
+
 namespace clutterscope::datasets {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 CatalogueItem make_item(int obj_id, const std::string& name, ShapeKind shape, double x, double y,
                         double z, std::array<std::uint8_t, 3> colour, bool flat_top = true) {

@@ -4,11 +4,12 @@
 #include <cmath>
 #include <sstream>
 
+#include "pi.hpp"
+
 namespace clutterscope::datasets {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kTableTopZ = 0.0;
 // Objects keep this far from the region's border (tray walls, shelf edge).
 constexpr double kBorderMargin = 0.002;

@@ -6,12 +6,11 @@
 #include <stdexcept>
 
 #include "depth_edges.hpp"
+#include "pi.hpp"
 
 namespace clutterscope::datasets {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 Eigen::Vector3d back_project(const Camera& camera, int u, int v, double z) {
   // Pixel centres at (u + 0.5, v + 0.5), the renderer's default convention.

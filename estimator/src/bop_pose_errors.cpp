@@ -6,11 +6,11 @@
 #include <stdexcept>
 #include <string>
 
+#include "pi.hpp"
+
 namespace clutterscope::estimator {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // transform.rotation_matrix (Gohlke's transformations.py, which bop_toolkit ships): about the
 // unit axis d, R = cos(a) I + (1 - cos(a)) d d^T + sin(a) [d]_x.

@@ -5,13 +5,9 @@
 #include <cmath>
 #include <limits>
 
+#include "pi.hpp"
+
 namespace clutterscope::estimator {
-
-namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-
-}  // namespace
 
 double chi_square_3_cdf(double x) {
   if (!(x > 0.0)) return 0.0;
