@@ -15,10 +15,12 @@ fi
 # -O0 (tests/CMakeLists.txt), and libFuzzer's coverage instrumentation, so that the same objects
 # serve the test suites and the fuzz targets (CLUTTERSCOPE_FUZZ, cmake/ClutterscopeTarget.cmake).
 # No Python module: a sanitized extension would need the ASan runtime preloaded into python3.
+# No unity build: this tree compiles each .cpp on its own, so an #include that a file lacks (and
+# that another file of its library's unit supplies in build/) fails here.
 sanitizer_tree="$root/build-san"
 configure_sanitizer_tree() {
   cmake -S "$root" -B "$sanitizer_tree" -G Ninja -DCMAKE_BUILD_TYPE=Release \
     -DCMAKE_CXX_FLAGS=-g1 -DCMAKE_CXX_COMPILER=clang++ -DCLUTTERSCOPE_FUZZ=ON \
-    -DCLUTTERSCOPE_PYTHON=OFF \
+    -DCLUTTERSCOPE_PYTHON=OFF -DCLUTTERSCOPE_UNITY_BUILD=OFF \
     "${CLUTTERSCOPE_LAUNCHER[@]}" >/dev/null
 }
