@@ -73,16 +73,27 @@ double correlated_pixels_from_residuals(const std::vector<double>& residuals, in
 
 Eigen::Matrix3d pixel_information(const Eigen::Matrix3d& normal_sum, int pixels,
                                   double noise_variance, double correlated_pixels,
-                                  double excess_variance) {
+                                  double excess_variance, double bias_variance) {
   if (!(noise_variance > 0) || !std::isfinite(noise_variance))
     throw std::invalid_argument("pixel noise variance must be finite and > 0");
   if (!(correlated_pixels >= 1) || !std::isfinite(correlated_pixels))
     throw std::invalid_argument("correlated pixels must be finite and >= 1");
   if (!(excess_variance >= 0) || !std::isfinite(excess_variance))
     throw std::invalid_argument("excess residual variance must be finite and >= 0");
+  if (!(bias_variance >= 0) || !std::isfinite(bias_variance))
+    throw std::invalid_argument("normal-weighted bias variance must be finite and >= 0");
   if (pixels <= 0) return Eigen::Matrix3d::Zero();
-  const Eigen::Matrix3d symmetric = 0.5 * (normal_sum + normal_sum.transpose());
-  return symmetric / (correlated_pixels * noise_variance + pixels * excess_variance);
+  const double n = pixels;
+  const double per_pixel = correlated_pixels * noise_variance + n * excess_variance;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> mean_normals(
+      0.5 * (normal_sum + normal_sum.transpose()) / n);
+  const Eigen::Vector3d information =
+      mean_normals.eigenvalues().unaryExpr([&](double m) {
+        return m > 0 ? n * m * m / (per_pixel * m + n * bias_variance) : 0.0;
+      });
+  const Eigen::Matrix3d& u = mean_normals.eigenvectors();
+  const Eigen::Matrix3d j = u * information.asDiagonal() * u.transpose();
+  return 0.5 * (j + j.transpose());
 }
 
 Eigen::Matrix3d belief_bound(const GaussianMixture& belief) {

@@ -85,9 +85,12 @@ FreeSpaceCount count_free_space_violations(const BoxObservation& o,
     for (int i = 0; i < gw; ++i) {
       const float observed = o.depth[static_cast<size_t>(j) * o.stride * o.width + i * o.stride];
       const float synthetic = synthetic_depth[static_cast<size_t>(j) * gw + i];
-      if (!(observed > 0) || !(synthetic > 0)) continue;
+      if (!(synthetic > 0)) continue;
+      ++count.silhouette;
+      if (!(observed > 0)) continue;
       ++count.overlap;
       if (observed > synthetic + tolerance) ++count.seen_through;
+      if (observed < synthetic - tolerance) ++count.occluded;
     }
   }
   return count;

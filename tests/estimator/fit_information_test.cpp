@@ -90,19 +90,40 @@ TEST(FitInformation, PixelInformationCountsEveryPixelAndTheExcessOnce) {
   // 1000 pixels of a plane facing z: H = 1000 e_z e_z^T.
   const Eigen::Matrix3d h = 1000 * Eigen::Vector3d::UnitZ() * Eigen::Vector3d::UnitZ().transpose();
   // Independent pixels, sigma 2 mm: variance along z 4e-6 / 1000.
-  Eigen::Matrix3d j = pixel_information(h, 1000, 4e-6, 1.0, 0.0);
+  Eigen::Matrix3d j = pixel_information(h, 1000, 4e-6, 1.0, 0.0, 0.0);
   EXPECT_NEAR(j(2, 2), 1000 / 4e-6, 1e-3);
-  EXPECT_EQ(j(0, 0), 0.0);
+  EXPECT_NEAR(j(0, 0), 0.0, 1e-6);
   // Errors shared by 81 pixels: 81 times the variance.
-  j = pixel_information(h, 1000, 4e-6, 81.0, 0.0);
+  j = pixel_information(h, 1000, 4e-6, 81.0, 0.0, 0.0);
   EXPECT_NEAR(1 / j(2, 2), 81 * 4e-6 / 1000, 1e-15);
   // An excess of 1 mm^2 on every pixel does not average: variance 1e-6 + 4e-6 / 1000.
-  j = pixel_information(h, 1000, 4e-6, 1.0, 1e-6);
+  j = pixel_information(h, 1000, 4e-6, 1.0, 1e-6, 0.0);
   EXPECT_NEAR(1 / j(2, 2), 1e-6 + 4e-6 / 1000, 1e-15);
-  EXPECT_EQ(pixel_information(Eigen::Matrix3d::Zero(), 0, 4e-6, 1.0, 0.0), Eigen::Matrix3d::Zero());
-  EXPECT_THROW(pixel_information(h, 1000, 0.0, 1.0, 0.0), std::invalid_argument);
-  EXPECT_THROW(pixel_information(h, 1000, 4e-6, 0.5, 0.0), std::invalid_argument);
-  EXPECT_THROW(pixel_information(h, 1000, 4e-6, 1.0, -1e-6), std::invalid_argument);
+  EXPECT_EQ(pixel_information(Eigen::Matrix3d::Zero(), 0, 4e-6, 1.0, 0.0, 0.0), Eigen::Matrix3d::Zero());
+  EXPECT_THROW(pixel_information(h, 1000, 0.0, 1.0, 0.0, 0.0), std::invalid_argument);
+  EXPECT_THROW(pixel_information(h, 1000, 4e-6, 0.5, 0.0, 0.0), std::invalid_argument);
+  EXPECT_THROW(pixel_information(h, 1000, 4e-6, 1.0, -1e-6, 0.0), std::invalid_argument);
+  EXPECT_THROW(pixel_information(h, 1000, 4e-6, 1.0, 0.0, -1e-9), std::invalid_argument);
+}
+
+TEST(FitInformation, NormalWeightedBiasMovesAFitByItOverTheShareOfItsNormals) {
+  // 1000 pixels: 900 of a face along x, 100 of a face along z, rotated so that the axes are
+  // not the frame's. Shares of the normals m = 0.9 (x) and 0.1 (z), none along y.
+  const Eigen::Matrix3d rotation =
+      Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Vector3d x = rotation.col(0), y = rotation.col(1), z = rotation.col(2);
+  const Eigen::Matrix3d h = 900 * x * x.transpose() + 100 * z * z.transpose();
+  const double noise = 4e-6, excess = 1e-8, bias = 1e-9;  // s^2, e^2, b^2 (m^2)
+  const Eigen::Matrix3d j = pixel_information(h, 1000, noise, 4.0, excess, bias);
+  // Covariance (c s^2 + N e^2) H^-1 + b^2 M^-2 along each face's normal.
+  const double per_pixel = 4.0 * noise + 1000 * excess;
+  EXPECT_NEAR(1 / x.dot(j * x), per_pixel / 900 + bias / (0.9 * 0.9), 1e-15);
+  EXPECT_NEAR(1 / z.dot(j * z), per_pixel / 100 + bias / (0.1 * 0.1), 1e-15);
+  EXPECT_NEAR(y.dot(j * y), 0.0, 1e-6);
+  EXPECT_NEAR(x.dot(j * z), 0.0, 1e-6);
+  // Without the bias, H / (c s^2 + N e^2) exactly.
+  const Eigen::Matrix3d plain = pixel_information(h, 1000, noise, 4.0, excess, 0.0);
+  EXPECT_LT((plain - h / per_pixel).norm(), 1e-9 * (h / per_pixel).norm());
 }
 
 GaussianMixture mixture(const Eigen::Matrix3Xd& means, const Eigen::VectorXd& weights,

@@ -48,6 +48,15 @@ TEST(Scorer, FreeSpaceCountsRaysThatSeePastTheHypothesis) {
   EXPECT_EQ(none.overlap, 1);
   EXPECT_EQ(none.seen_through, 0);
   EXPECT_DOUBLE_EQ(count_free_space_violations(o, {0.0f, 0.0f}, 0.02).share(), 0.0);
+  // A surface at 1.04 behind pixel 1's 0.99 is hidden there; pixel 0 (1.05) is not in front of
+  // it. One of two silhouette pixels occluded; none within the tolerance or without a surface.
+  const FreeSpaceCount behind = count_free_space_violations(o, {1.04f, 1.04f}, 0.02);
+  EXPECT_EQ(behind.silhouette, 2);
+  EXPECT_EQ(behind.occluded, 1);
+  EXPECT_DOUBLE_EQ(behind.occluded_share(), 0.5);
+  EXPECT_EQ(count_free_space_violations(o, {1.04f, 1.04f}, 0.06).occluded, 0);
+  EXPECT_EQ(count_free_space_violations(o, {0.0f, 1.04f}, 0.02).silhouette, 1);
+  EXPECT_DOUBLE_EQ(count_free_space_violations(o, {0.0f, 0.0f}, 0.02).occluded_share(), 0.0);
   EXPECT_THROW(count_free_space_violations(o, {1.0f}, 0.02), std::invalid_argument);
 }
 

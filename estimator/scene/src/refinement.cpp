@@ -102,11 +102,13 @@ ObservedPoints observed_points(const estimator::BoxObservation& o, int limit) {
 // of the pixels that correspond to the model, the noise of the sensor that measured them where
 // it is described (its variance at their median depth and its matching window; the residual
 // variance beyond the sensor's is the model's surface against the depth, which does not
-// average), else the residuals' robust variance and their neighbour correlation.
+// average), else the residuals' robust variance and their neighbour correlation; and the bias
+// of occlusion boundaries, whose variance grows with the occluded share of the model's
+// silhouette (EstimateOptions::fit_occlusion_bias_m).
 Eigen::Matrix3d fit_information(const SceneEstimator::State& s,
                                 const estimator::TranslationIcp& icp,
                                 const estimator::BoxObservation& o, const ObservedPoints& all,
-                                const Eigen::Vector3d& position) {
+                                const Eigen::Vector3d& position, double occluded_share) {
   const estimator::PlaneResiduals fit = icp.plane_residuals(all.points, position, &all.normals);
   if (fit.matched == 0) return Eigen::Matrix3d::Zero();
   std::vector<double> residuals, depths;
@@ -121,12 +123,14 @@ Eigen::Matrix3d fit_information(const SceneEstimator::State& s,
   const double residual_variance = std::max(estimator::robust_variance(residuals), floor);
   const std::optional<double>& correlated = s.options.correlated_pixels;
   const double systematic = s.options.fit_systematic_m * s.options.fit_systematic_m;
+  const double bias =
+      s.options.fit_occlusion_bias_m * s.options.fit_occlusion_bias_m * occluded_share;
   if (!s.noise.described) {
     return estimator::pixel_information(
         fit.normal_information, fit.matched, residual_variance,
         correlated ? *correlated
                    : estimator::correlated_pixels_from_residuals(grid, o.width, o.height),
-        systematic);
+        systematic, bias);
   }
   const datasets::DeclaredNoise& d = s.noise;
   estimator::PixelNoise noise;
@@ -147,14 +151,17 @@ Eigen::Matrix3d fit_information(const SceneEstimator::State& s,
   const double sensor_variance = std::max(estimator::depth_variance(noise, *middle), floor);
   return estimator::pixel_information(fit.normal_information, fit.matched, sensor_variance,
                                       noise.correlated_pixels,
-                                      std::max(systematic, residual_variance - sensor_variance));
+                                      std::max(systematic, residual_variance - sensor_variance),
+                                      bias);
 }
 
-// The free-space share of the full model of obj_id at (rotation, translation) over the detection
-// box of `observation`, every pixel of the box (ObjectEstimate::seen_through).
-double free_space_share(SceneEstimator::State& s, int obj_id, const Eigen::Matrix3d& rotation,
-                        const Eigen::Vector3d& translation,
-                        const estimator::BoxObservation& observation) {
+// The free-space test of the full model of obj_id at (rotation, translation) over the detection
+// box of `observation`, every pixel of the box (ObjectEstimate::seen_through), with the share of
+// its silhouette that something nearer hides.
+estimator::FreeSpaceCount free_space_count(SceneEstimator::State& s, int obj_id,
+                                           const Eigen::Matrix3d& rotation,
+                                           const Eigen::Vector3d& translation,
+                                           const estimator::BoxObservation& observation) {
   estimator::BoxObservation box = observation;
   box.stride = 1;
   render::TileRequest request;
@@ -170,8 +177,7 @@ double free_space_share(SceneEstimator::State& s, int obj_id, const Eigen::Matri
   for (int r = 0; r < box.height; ++r)
     for (int c = 0; c < box.width; ++c)
       synthetic[static_cast<std::size_t>(r) * box.width + c] = depth.at<float>(r, c);
-  return estimator::count_free_space_violations(box, synthetic, s.options.free_space_tolerance_m)
-      .share();
+  return estimator::count_free_space_violations(box, synthetic, s.options.free_space_tolerance_m);
 }
 
 // The refined estimate of a visible object: the fused ICP fits from K belief samples, with the
@@ -230,10 +236,16 @@ bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
   const Eigen::Vector3d position = !refined.too_few_correspondences && refined.position.allFinite()
                                        ? refined.position
                                        : fused_camera;
+  // The share of the model's silhouette at the fit that nearer surfaces hide: occlusion
+  // boundaries bias the fit (EstimateOptions::fit_occlusion_bias_m).
+  const double occluded_share =
+      free_space_count(s, object->obj_id, object->rotation,
+                       position - object->rotation * object->model_centre, *object->observation)
+          .occluded_share();
   const Eigen::Matrix3d to_support = frame.camera_to_support.linear();
-  const Eigen::Matrix3d information = to_support *
-                                      fit_information(s, icp, *object->observation, all, position) *
-                                      to_support.transpose();
+  const Eigen::Matrix3d information =
+      to_support * fit_information(s, icp, *object->observation, all, position, occluded_share) *
+      to_support.transpose();
   estimator::GaussianMixture spread = belief;
   spread.variances = Eigen::Vector3d::Constant(options.proposal_min_bandwidth_m *
                                                options.proposal_min_bandwidth_m);
@@ -315,8 +327,9 @@ void refine_and_fuse(SceneEstimator::State& s, const SceneFrame& frame, const Sc
     object.variance = variance;
     object.model_translation = object.position - object.rotation * object.model_centre;
     if (!object.amodal) {
-      object.seen_through = free_space_share(s, object.obj_id, object.rotation,
-                                             object.model_translation, *object.observation);
+      object.seen_through = free_space_count(s, object.obj_id, object.rotation,
+                                             object.model_translation, *object.observation)
+                                .share();
     }
     object.consistent =
         (!object.seen_through || *object.seen_through <= options.max_seen_through) &&

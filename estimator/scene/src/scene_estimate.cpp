@@ -78,6 +78,8 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (!(min_residual_m > 0)) return fail("the residual floor must be > 0");
   if (!(fit_systematic_m >= 0) || !std::isfinite(fit_systematic_m))
     return fail("--fit-systematic-mm must be a finite number >= 0");
+  if (!(fit_occlusion_bias_m >= 0) || !std::isfinite(fit_occlusion_bias_m))
+    return fail("--fit-occlusion-bias-mm must be a finite number >= 0");
   if (!(free_space_tolerance_m >= 0) || !std::isfinite(free_space_tolerance_m))
     return fail("free-space tolerance must be a finite number >= 0");
   if (!(max_seen_through >= 0 && max_seen_through <= 1))

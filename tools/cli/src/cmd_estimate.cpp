@@ -81,6 +81,12 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
       "(mm, >= 0; default " +
           std::to_string(1e3 * scene_estimation::kFitSystematicM).substr(0, 4) + ")");
   command.add_option_function<double>(
+      "--fit-occlusion-bias-mm", [&e](double mm) { e.fit_occlusion_bias_m = 1e-3 * mm; },
+      "the bias occlusion boundaries give the ICP fit of a model whose silhouette is entirely "
+      "hidden (mm, >= 0; its variance scales with the hidden share, and a direction that a share "
+      "m of the fit's normals faces moves by it over m; default " +
+          std::to_string(1e3 * scene_estimation::kFitOcclusionBiasM).substr(0, 5) + ")");
+  command.add_option_function<double>(
       "--correlated-pixels", [&e](double pixels) { e.correlated_pixels = pixels; },
       "the ICP fit's depth errors count as one per this many image pixels (>= 1; larger: "
       "wider variances). Default: the sensor's matching window (sensor.json or --sensor with "

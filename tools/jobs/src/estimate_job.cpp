@@ -403,6 +403,7 @@ nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
   fingerprint["pixel_noise_source"] = resolve_pixel_noise(e, dataset).source;
   if (e.correlated_pixels) fingerprint["correlated_pixels"] = *e.correlated_pixels;
   fingerprint["fit_systematic_mm"] = 1e3 * e.fit_systematic_m;
+  fingerprint["fit_occlusion_bias_mm"] = 1e3 * e.fit_occlusion_bias_m;
   // Full 3x3 covariances (cov_* columns, nees = e^T S^-1 e) and only converged ICP fits fused:
   // folders of earlier estimators (diagonal nees) neither resume nor merge with these.
   fingerprint["covariance"] = "full";

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "statistic_json.hpp"
+
 namespace clutterscope::report {
 
 namespace {
@@ -42,16 +44,6 @@ const ScoreRow* row_at(const ScoreBand& band, const Statistic& score) {
   return nullptr;
 }
 
-Json json_value(const Statistic& statistic) {
-  return statistic.defined() && std::isfinite(*statistic.value) ? Json(*statistic.value)
-                                                                : Json(nullptr);
-}
-
-void put(Json& object, Json& undefined, const char* name, const Statistic& statistic) {
-  object[name] = json_value(statistic);
-  if (!statistic.defined()) undefined[name] = statistic.undefined_reason;
-}
-
 Json recall_json(const VisibilityRecall& recall) {
   Json json = {{"visibility_min", recall.visibility_min},
                {"visibility_max", recall.visibility_max},
@@ -60,8 +52,8 @@ Json recall_json(const VisibilityRecall& recall) {
   Json metrics = Json::object();
   for (const MetricRecall& metric : recall.metrics) {
     Json entry, undefined = Json::object();
-    put(entry, undefined, "average_recall", metric.average_recall);
-    put(entry, undefined, "median_error", metric.median_error);
+    put_statistic(entry, undefined, "average_recall", metric.average_recall);
+    put_statistic(entry, undefined, "median_error", metric.median_error);
     entry["error_unit"] = error_unit(metric.metric);
     Json grid = Json::array();
     for (size_t k = 0; k < metric.thresholds.size(); ++k) {
@@ -87,19 +79,19 @@ Json score_band_json(const ScoreBand& band) {
                   {"estimated", row.estimated}, {"correct", row.correct},
                   {"accepted", row.accepted},   {"accepted_correct", row.accepted_correct}};
     Json undefined = Json::object();
-    put(entry, undefined, "precision", row.quality.precision);
-    put(entry, undefined, "recall", row.quality.recall);
-    put(entry, undefined, "f1", row.quality.f1);
-    put(entry, undefined, "target_recall", row.target_recall);
+    put_statistic(entry, undefined, "precision", row.quality.precision);
+    put_statistic(entry, undefined, "recall", row.quality.recall);
+    put_statistic(entry, undefined, "f1", row.quality.f1);
+    put_statistic(entry, undefined, "target_recall", row.target_recall);
     entry["undefined"] = undefined;
     sweep.push_back(entry);
   }
   json["sweep"] = sweep;
   Json recommendation, undefined = Json::object();
-  put(recommendation, undefined, "lowest_score_with_min_precision",
+  put_statistic(recommendation, undefined, "lowest_score_with_min_precision",
       band.recommendation.lowest_score_with_min_precision);
-  put(recommendation, undefined, "best_f1_score", band.recommendation.best_f1_score);
-  put(recommendation, undefined, "best_f1", band.recommendation.best_f1);
+  put_statistic(recommendation, undefined, "best_f1_score", band.recommendation.best_f1_score);
+  put_statistic(recommendation, undefined, "best_f1", band.recommendation.best_f1);
   recommendation["undefined"] = undefined;
   json["recommendation"] = recommendation;
   return json;
@@ -111,7 +103,7 @@ Json correlation_json(const ErrorCorrelation& correlation, const BootstrapOption
                {"n", c.n},
                {"unmatched", correlation.unmatched},
                {"excluded", correlation.excluded},
-               {"spearman", json_value(c.estimate)}};
+               {"spearman", statistic_json(c.estimate)}};
   json["interval"] =
       c.interval ? Json{{"low", c.interval->low}, {"high", c.interval->high}} : Json(nullptr);
   json["confidence"] = bootstrap.confidence;

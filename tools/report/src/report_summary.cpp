@@ -4,6 +4,7 @@
 #include <clutterscope/report/report.hpp>
 
 #include "report_text.hpp"
+#include "statistic_json.hpp"
 
 namespace clutterscope::report {
 
@@ -11,20 +12,10 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 
-Json json_value(const Statistic& statistic) {
-  return statistic.defined() ? Json(*statistic.value) : Json(nullptr);
-}
-
-// Writes `name: value-or-null` and records the reason of an undefined value in `undefined`.
-void put(Json& object, Json& undefined, const char* name, const Statistic& statistic) {
-  object[name] = json_value(statistic);
-  if (!statistic.defined()) undefined[name] = statistic.undefined_reason;
-}
-
 Json correlation_json(const CorrelationWithInterval& c, const BootstrapOptions& bootstrap) {
   Json json;
   json["n"] = c.n;
-  json["value"] = json_value(c.estimate);
+  json["value"] = statistic_json(c.estimate);
   if (c.interval) {
     json["interval"] = {{"low", c.interval->low}, {"high", c.interval->high}};
   } else {
@@ -60,10 +51,10 @@ Json threshold_row_json(const ThresholdRow& row) {
   json["accepted"] = row.accepted;
   json["accepted_accurate"] = row.accepted_accurate;
   json["accepted_below_cutoff"] = row.accepted_below_cutoff;
-  put(json, undefined, "precision", row.precision);
-  put(json, undefined, "recall", row.recall);
-  put(json, undefined, "f1", row.f1);
-  put(json, undefined, "accepted_below_cutoff_share", row.accepted_below_cutoff_share);
+  put_statistic(json, undefined, "precision", row.precision);
+  put_statistic(json, undefined, "recall", row.recall);
+  put_statistic(json, undefined, "f1", row.f1);
+  put_statistic(json, undefined, "accepted_below_cutoff_share", row.accepted_below_cutoff_share);
   json["undefined"] = undefined;
   return json;
 }
@@ -99,12 +90,12 @@ Json counts_json(const ReportCounts& c) {
 
 Json visibility_json(const VisibilitySummary& v) {
   Json visibility, undefined = Json::object();
-  put(visibility, undefined, "mean", v.mean);
-  put(visibility, undefined, "median", v.median);
-  put(visibility, undefined, "p10", v.p10);
-  put(visibility, undefined, "p25", v.p25);
-  put(visibility, undefined, "p75", v.p75);
-  put(visibility, undefined, "p90", v.p90);
+  put_statistic(visibility, undefined, "mean", v.mean);
+  put_statistic(visibility, undefined, "median", v.median);
+  put_statistic(visibility, undefined, "p10", v.p10);
+  put_statistic(visibility, undefined, "p25", v.p25);
+  put_statistic(visibility, undefined, "p75", v.p75);
+  put_statistic(visibility, undefined, "p90", v.p90);
   visibility["below_10"] = v.below_10;
   visibility["below_30"] = v.below_30;
   visibility["below_cutoff"] = v.below_cutoff;
@@ -124,11 +115,11 @@ Json bands_json(const std::vector<VisibilityBand>& bands) {
     row["confident"] = band.confident;
     row["confident_with_error"] = band.confident_with_error;
     row["confident_inaccurate"] = band.confident_inaccurate;
-    put(row, band_undefined, "median_variance_cm2", band.median_variance_cm2);
-    put(row, band_undefined, "mean_variance_cm2", band.mean_variance_cm2);
-    put(row, band_undefined, "median_error_cm", band.median_error_cm);
-    put(row, band_undefined, "confident_share", band.confident_share);
-    put(row, band_undefined, "confident_inaccurate_share", band.confident_inaccurate_share);
+    put_statistic(row, band_undefined, "median_variance_cm2", band.median_variance_cm2);
+    put_statistic(row, band_undefined, "mean_variance_cm2", band.mean_variance_cm2);
+    put_statistic(row, band_undefined, "median_error_cm", band.median_error_cm);
+    put_statistic(row, band_undefined, "confident_share", band.confident_share);
+    put_statistic(row, band_undefined, "confident_inaccurate_share", band.confident_inaccurate_share);
     row["undefined"] = band_undefined;
     rows.push_back(row);
   }
@@ -139,10 +130,10 @@ Json recommendation_json(const ThresholdRecommendation& recommendation, double m
                          const char* unit_suffix) {
   Json json, undefined = Json::object();
   json["min_precision"] = min_precision;
-  put(json, undefined, (std::string("largest_with_min_precision_") + unit_suffix).c_str(),
+  put_statistic(json, undefined, (std::string("largest_with_min_precision_") + unit_suffix).c_str(),
       recommendation.largest_with_min_precision);
-  put(json, undefined, (std::string("best_f1_") + unit_suffix).c_str(), recommendation.best_f1);
-  put(json, undefined, "best_f1", recommendation.best_f1_value);
+  put_statistic(json, undefined, (std::string("best_f1_") + unit_suffix).c_str(), recommendation.best_f1);
+  put_statistic(json, undefined, "best_f1", recommendation.best_f1_value);
   json["undefined"] = undefined;
   return json;
 }
@@ -155,7 +146,7 @@ Json cutoffs_json(const std::vector<CutoffRow>& cutoffs) {
     entry["objects_below"] = row.objects_below;
     entry["accepted_below"] = row.accepted_below;
     entry["accepted_below_inaccurate"] = row.accepted_below_inaccurate;
-    put(entry, entry_undefined, "accepted_share", row.accepted_share);
+    put_statistic(entry, entry_undefined, "accepted_share", row.accepted_share);
     entry["undefined"] = entry_undefined;
     rows.push_back(entry);
   }
@@ -210,9 +201,9 @@ Json images_json(const std::vector<ImageSummary>& summaries) {
   Json images, images_undefined = Json::object();
   images["count"] = summaries.size();
   images["without_scene_visibility"] = summaries.size() - scene_visibility.size();
-  put(images, images_undefined, "scene_visibility_median", median(scene_visibility));
-  put(images, images_undefined, "scene_visibility_min", quantile(scene_visibility, 0.0));
-  put(images, images_undefined, "scene_visibility_max", quantile(scene_visibility, 1.0));
+  put_statistic(images, images_undefined, "scene_visibility_median", median(scene_visibility));
+  put_statistic(images, images_undefined, "scene_visibility_min", quantile(scene_visibility, 0.0));
+  put_statistic(images, images_undefined, "scene_visibility_max", quantile(scene_visibility, 1.0));
   images["undefined"] = images_undefined;
   return images;
 }

@@ -45,15 +45,21 @@ double robust_variance(std::vector<double> residuals);
 double correlated_pixels_from_residuals(const std::vector<double>& residuals, int width,
                                         int height);
 
-// The fit's information about the position from N pixels (Eq.: J = H / (c s^2 + N e^2)):
+// The fit's information about the position from N pixels: the inverse of the covariance
+//   (c s^2 + N e^2) H^-1 + b^2 M^-2,   M = H / N,
 // H = sum over the pixels of n n^T (model normals), c pixels per independent error of variance
-// s^2 (the sensor's noise, which averages over the pixels), and e^2 the residual variance
-// beyond the sensor's (the model's surface against the depth: the same error on every pixel,
-// which does not average). Symmetric; zero for no pixels. Throws std::invalid_argument for
-// s^2 <= 0, c < 1 or e^2 < 0.
+// s^2 (the sensor's noise, which averages over the pixels), e^2 the residual variance beyond
+// the sensor's (the model's surface against the depth: the same error on every pixel, which
+// does not average), and b^2 the variance of the mean normal-weighted residual bias (occlusion
+// boundaries, say): the point-to-plane fit moves by M^-1 times that mean,
+// so along a direction that only a share m of the pixels' normals faces (an eigenvalue of M)
+// the bias moves it by b / m, not b / sqrt(m). Per eigenvector of M with eigenvalue m:
+// information N m^2 / ((c s^2 + N e^2) m + N b^2), zero where m = 0; b = 0 gives H / (c s^2 +
+// N e^2). Symmetric; zero for no pixels. Throws std::invalid_argument for s^2 <= 0, c < 1,
+// e^2 < 0 or b^2 < 0.
 Eigen::Matrix3d pixel_information(const Eigen::Matrix3d& normal_sum, int pixels,
                                   double noise_variance, double correlated_pixels,
-                                  double excess_variance);
+                                  double excess_variance, double bias_variance);
 
 // The belief's bound on the position: its covariance (particles and kernels) plus the Monte
 // Carlo error of a weighted sample, the spread of its particles (unweighted: where the

@@ -63,11 +63,17 @@ double pixel_cost(const BoxObservation& observation, const std::vector<float>& s
 // than `tolerance` (metres of camera Z): rays the hypothesised object would block. An estimate
 // in front of what the camera sees (lifted off its support, slid onto a neighbour's place)
 // shows them on much of its silhouette; a right one only where the sensor errs (flying pixels,
-// edges, misfit).
+// edges, misfit). The same pass counts the pixels where something nearer than the synthetic
+// surface hides it (by more than `tolerance`): the pose's occluded share of its silhouette.
 struct FreeSpaceCount {
   int overlap = 0;       // grid pixels with observed and synthetic depth
   int seen_through = 0;  // of those, observed farther than synthetic + tolerance
+  int silhouette = 0;    // grid pixels with synthetic depth
+  int occluded = 0;      // of those, observed nearer than synthetic - tolerance
   double share() const { return overlap > 0 ? static_cast<double>(seen_through) / overlap : 0.0; }
+  double occluded_share() const {
+    return silhouette > 0 ? static_cast<double>(occluded) / silhouette : 0.0;
+  }
 };
 FreeSpaceCount count_free_space_violations(const BoxObservation& observation,
                                            const std::vector<float>& synthetic_depth,
