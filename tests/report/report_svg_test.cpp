@@ -2,9 +2,11 @@
 
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/report/plots.hpp>
+#include <clutterscope/report/report.hpp>
 #include <clutterscope/report/svg.hpp>
 #include <opencv2/core.hpp>
 #include <regex>
+#include <stdexcept>
 
 #include "report_test_tables.hpp"
 
@@ -156,9 +158,12 @@ TEST_F(ReportSvg, ThresholdSweepHistogramAndBarsAreWellFormed) {
   EXPECT_EQ(count(sweep, "<polyline"), 3);
   EXPECT_NE(sweep.find("variance threshold T (cm\u00b2, log scale)"), std::string::npos);
 
-  const std::string histogram = visibility_histogram_plot(rows, 0.3);
+  const VisibilitySummary visibility = analyse_report(rows, {}, ReportOptions{}).visibility;
+  const std::string histogram =
+      visibility_histogram_plot(visibility.histogram_edges, visibility.histogram_counts, 0.3);
   EXPECT_TRUE(well_formed("histogram", histogram));
   EXPECT_NE(histogram.find("objects (count)"), std::string::npos);
+  EXPECT_THROW(visibility_histogram_plot({0.0, 1.0}, {1, 2}, 0.3), std::invalid_argument);
 
   std::vector<ObjectRow> image = {testing::object(0.86, 0.1, 0.2, 0, 0),
                                   testing::object(0.05, 3.0, 2.0, 0, 1),

@@ -10,6 +10,8 @@
 #include <clutterscope/datasets/sensor.hpp>
 #include <clutterscope/scene_estimation/scene_estimate.hpp>
 #include <filesystem>
+#include <limits>
+#include <string>
 
 #include "bop_fixture_support.hpp"
 
@@ -50,6 +52,25 @@ TEST(ModelMisfit, ComesFromTheOptionsTheSensorTheDatasetOrTheRealDataDefault) {
   std::string why;
   EXPECT_FALSE(options.IsValid(&why));
   EXPECT_NE(why.find("--model-misfit-mm"), std::string::npos);
+}
+
+TEST(ModelMisfit, FitConstantsMustBeFiniteAndNonNegative) {
+  for (const double bad : {-1e-4, std::numeric_limits<double>::infinity(),
+                           std::numeric_limits<double>::quiet_NaN()}) {
+    EstimateOptions options;
+    std::string why;
+    options.fit_systematic_m = bad;
+    EXPECT_FALSE(options.IsValid(&why));
+    EXPECT_NE(why.find("--fit-systematic-mm"), std::string::npos) << why;
+    options = EstimateOptions{};
+    options.fit_occlusion_bias_m = bad;
+    EXPECT_FALSE(options.IsValid(&why));
+    EXPECT_NE(why.find("--fit-occlusion-bias-mm"), std::string::npos) << why;
+  }
+  EstimateOptions zero;
+  zero.fit_systematic_m = 0;
+  zero.fit_occlusion_bias_m = 0;
+  EXPECT_TRUE(zero.IsValid(nullptr));
 }
 
 TEST(ModelMisfit, IsZeroForImagesRenderedFromTheModels) {

@@ -5,6 +5,7 @@
 #include <clutterscope/report/report.hpp>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 
 #include "report_text.hpp"
 
@@ -12,7 +13,6 @@ namespace clutterscope::report {
 
 namespace {
 
-constexpr int kHistogramBins = 20;
 
 std::string format_g(double value) { return batch::printf_general(value); }
 
@@ -111,16 +111,13 @@ std::string calibration_plot(const Coverage& all, const Coverage& confident,
   return chart.render();
 }
 
-std::string visibility_histogram_plot(const std::vector<ObjectRow>& objects,
+std::string visibility_histogram_plot(const std::vector<double>& histogram_edges,
+                                      const std::vector<int>& histogram_counts,
                                       double visibility_cutoff) {
-  std::vector<double> edges, counts(kHistogramBins, 0.0);
-  for (int b = 0; b <= kHistogramBins; ++b) edges.push_back(100.0 * b / kHistogramBins);
-  for (const ObjectRow& object : objects) {
-    const int bin =
-        std::clamp(static_cast<int>(std::floor(object.visib_fract * kHistogramBins + 1e-9)), 0,
-                   kHistogramBins - 1);
-    counts[bin] += 1.0;
-  }
+  if (histogram_edges.size() != histogram_counts.size() + 1)
+    throw std::invalid_argument("visibility histogram: one more edge than bins expected");
+  std::vector<double> edges, counts(histogram_counts.begin(), histogram_counts.end());
+  for (const double edge : histogram_edges) edges.push_back(100.0 * edge);
   svg::Chart chart("Object visibility", {"object visibility V_i (%)", false, 0.0, 100.0},
                    {"objects (count)", false, {}, {}});
   chart.add_histogram(edges, counts, svg::category_colour(0), "objects per 5% bin");
@@ -177,7 +174,9 @@ std::vector<NamedPlot> standard_plots(const std::vector<ObjectRow>& objects,
                                       analysis.calibration.confident_radius)});
   }
   plots.push_back({"visibility_histogram", "Distribution of object visibility V_i (Eq. 10).",
-                   visibility_histogram_plot(objects, options.visibility_cutoff)});
+                   visibility_histogram_plot(analysis.visibility.histogram_edges,
+                                             analysis.visibility.histogram_counts,
+                                             options.visibility_cutoff)});
 
   // Most cluttered images first (lowest V^s), ties in key order.
   // Images without an object in view have no V^s and no bars.

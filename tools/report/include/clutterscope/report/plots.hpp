@@ -30,8 +30,11 @@ std::string threshold_sweep_plot(const ThresholdAnalysis& analysis);
 std::string calibration_plot(const Coverage& all, const Coverage& confident,
                              const std::optional<Coverage>& confident_radius);
 
-// Histogram of object visibility in 5% bins with the cutoff as a vertical line.
-std::string visibility_histogram_plot(const std::vector<ObjectRow>& objects,
+// Histogram of object visibility (the report analysis's bins: VisibilitySummary's edges in
+// [0, 1] and counts) with the cutoff as a vertical line. Throws std::invalid_argument unless
+// there is one more edge than counts.
+std::string visibility_histogram_plot(const std::vector<double>& histogram_edges,
+                                      const std::vector<int>& histogram_counts,
                                       double visibility_cutoff);
 
 // The objects of one image with their visibility in % (the paper's Fig. 5): one bar per
