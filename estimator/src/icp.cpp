@@ -99,8 +99,8 @@ TranslationIcp::TranslationIcp(TranslationIcp&&) noexcept = default;
 TranslationIcp& TranslationIcp::operator=(TranslationIcp&&) noexcept = default;
 
 IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& initial,
-                                const Eigen::Matrix3Xd* observed_normals,
-                                int max_iterations) const {
+                                const Eigen::Matrix3Xd* observed_normals, int max_iterations,
+                                double max_plane_distance) const {
   if (observed_normals && observed_normals->cols() != observed.cols())
     throw std::invalid_argument("ICP needs one normal per observed point");
   const int iterations = max_iterations > 0 ? max_iterations : options_.max_iterations;
@@ -119,7 +119,8 @@ IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::V
       const Eigen::Vector3d query = observed.col(i) - result.position;  // into model offsets
       uint32_t nearest = 0;
       double distance_sq = 0;
-      if (!correspond(query, result.position, observed_normals, i, &nearest, &distance_sq))
+      if (!correspond(query, result.position, observed_normals, i, max_plane_distance, &nearest,
+                      &distance_sq))
         continue;
       const Eigen::Matrix3d a =
           tree_->normal_outer[nearest] + kPointToPointWeight * Eigen::Matrix3d::Identity();
@@ -149,7 +150,8 @@ IcpResult TranslationIcp::align(const Eigen::Matrix3Xd& observed, const Eigen::V
 }
 
 bool TranslationIcp::correspond(const Eigen::Vector3d& query, const Eigen::Vector3d& position,
-                                const Eigen::Matrix3Xd* observed_normals, int i, uint32_t* nearest,
+                                const Eigen::Matrix3Xd* observed_normals, int i,
+                                double max_plane_distance, uint32_t* nearest,
                                 double* distance_sq) const {
   const double max_sq = options_.max_correspondence_distance * options_.max_correspondence_distance;
   if (!query.allFinite()) return false;
@@ -159,6 +161,8 @@ bool TranslationIcp::correspond(const Eigen::Vector3d& query, const Eigen::Vecto
   // A model point facing away from the camera cannot be what the sensor saw: the table
   // around a box matched to its hidden bottom, say, would drag it sideways.
   if (options_.cull_back_faces && normal.dot(position + tree_->cloud.points.col(*nearest)) > 0)
+    return false;
+  if (std::abs(normal.dot(query - tree_->cloud.points.col(*nearest))) > max_plane_distance)
     return false;
   // Surfaces at an angle do not correspond: the floor next to a box is not its side.
   if (observed_normals) {
@@ -172,7 +176,8 @@ bool TranslationIcp::correspond(const Eigen::Vector3d& query, const Eigen::Vecto
 
 PlaneResiduals TranslationIcp::plane_residuals(const Eigen::Matrix3Xd& observed,
                                                const Eigen::Vector3d& position,
-                                               const Eigen::Matrix3Xd* observed_normals) const {
+                                               const Eigen::Matrix3Xd* observed_normals,
+                                               double max_plane_distance) const {
   if (observed_normals && observed_normals->cols() != observed.cols())
     throw std::invalid_argument("ICP needs one normal per observed point");
   PlaneResiduals result;
@@ -182,7 +187,9 @@ PlaneResiduals TranslationIcp::plane_residuals(const Eigen::Matrix3Xd& observed,
     const Eigen::Vector3d query = observed.col(i) - position;
     uint32_t nearest = 0;
     double distance_sq = 0;
-    if (!correspond(query, position, observed_normals, i, &nearest, &distance_sq)) continue;
+    if (!correspond(query, position, observed_normals, i, max_plane_distance, &nearest,
+                    &distance_sq))
+      continue;
     const Eigen::Vector3d normal = tree_->normals.col(nearest);
     if (normal.squaredNorm() == 0) continue;
     result.residual_m[static_cast<std::size_t>(i)] =

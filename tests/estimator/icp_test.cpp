@@ -197,6 +197,30 @@ TEST(Icp, PlaneResidualsAreTheOffsetAlongTheNormalAtAFixedPosition) {
   EXPECT_NEAR(fit.normal_information(2, 2), fit.matched, 0.05 * fit.matched);
 }
 
+TEST(Icp, PlaneGateDropsASurfaceOffTheModelsPlane) {
+  // The face z = 0.05 of a box seen at its place, and beside it a second surface 6 mm higher
+  // (a neighbour's face) within the correspondence distance: ungated, the fit settles between
+  // the two; gated at 3 mm from the model's tangent plane, on the face, with the neighbour's
+  // points unmatched and without residuals.
+  std::mt19937_64 rng(5);
+  const TranslationIcp icp(box_surface(Eigen::Vector3d(0.1, 0.1, 0.1), 4000, false, rng),
+                           IcpOptions{});
+  Eigen::Matrix3Xd observed(3, 150);
+  for (int i = 0; i < 100; ++i)
+    observed.col(i) = Eigen::Vector3d(-0.03 + 0.006 * (i % 10), -0.03 + 0.006 * (i / 10), 0.05);
+  for (int i = 0; i < 50; ++i)
+    observed.col(100 + i) =
+        Eigen::Vector3d(-0.03 + 0.006 * (i % 10), 0.035 + 0.003 * (i / 10), 0.056);
+  const IcpResult ungated = icp.align(observed, Eigen::Vector3d::Zero());
+  EXPECT_GT(ungated.position.z(), 0.001) << ungated.position.transpose();
+  const IcpResult gated = icp.align(observed, Eigen::Vector3d::Zero(), nullptr, 0, 0.003);
+  EXPECT_NEAR(gated.position.z(), 0.0, 2e-4) << gated.position.transpose();
+  EXPECT_LE(gated.correspondences, 100);
+  const PlaneResiduals residuals = icp.plane_residuals(observed, gated.position, nullptr, 0.003);
+  for (int i = 100; i < 150; ++i)
+    EXPECT_TRUE(std::isnan(residuals.residual_m[static_cast<std::size_t>(i)])) << i;
+}
+
 TEST(Icp, FuseFitsEdgeCasesAndBadInput) {
   const FusedEstimate one = fuse_fits({Eigen::Vector3d(1, 2, 3)}, 1e-6);
   EXPECT_EQ(one.mean, Eigen::Vector3d(1, 2, 3));

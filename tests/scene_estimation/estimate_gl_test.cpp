@@ -253,6 +253,17 @@ TEST_F(EstimateGl, ConsistencyChecksGateTheConfidentDecision) {
         continue;
       EXPECT_EQ(row[column.at("consistent")], "0") << extra << " row " << r;
       EXPECT_EQ(row[column.at("confident")], "0") << extra << " row " << r;
+      // Same estimate; a newly inconsistent one also carries its belief's covariance (and its
+      // offset from the belief's mean), so every axis variance grows and its NEES cannot.
+      const auto& before = defaults[r];
+      EXPECT_EQ(row[column.at("err_cm")], before[column.at("err_cm")]) << extra << " row " << r;
+      if (before[column.at("consistent")] != "1") continue;
+      for (const char* axis : {"var_x_cm2", "var_y_cm2", "var_z_cm2"}) {
+        EXPECT_GT(std::stod(row[column.at(axis)]), std::stod(before[column.at(axis)]))
+            << extra << " row " << r << " " << axis;
+      }
+      EXPECT_LE(std::stod(row[column.at("nees")]), std::stod(before[column.at("nees")]) + 1e-9)
+          << extra << " row " << r;
     }
   }
   const fs::path bad = fresh_dir("consistency_bad");

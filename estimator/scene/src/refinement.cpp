@@ -99,17 +99,19 @@ ObservedPoints observed_points(const estimator::BoxObservation& o, int limit) {
 
 // The fit's information about the object's position (camera frame) from every valid pixel of
 // its box at the fused estimate (estimator::pixel_information): the point-to-plane residuals
-// of the pixels that correspond to the model, the noise of the sensor that measured them where
-// it is described (its variance at their median depth and its matching window; the residual
-// variance beyond the sensor's is the model's surface against the depth, which does not
-// average), else the residuals' robust variance and their neighbour correlation; and the bias
-// of occlusion boundaries, whose variance grows with the occluded share of the model's
-// silhouette (EstimateOptions::fit_occlusion_bias_m).
+// of the pixels that correspond to the model (within plane_gate of its surface), the noise of
+// the sensor that measured them where it is described (its variance at their median depth and
+// its matching window; the residual variance beyond the sensor's is the model's surface against
+// the depth, which does not average), else the residuals' robust variance and their neighbour
+// correlation; and the bias of occlusion boundaries, whose variance grows with the occluded
+// share of the model's silhouette (EstimateOptions::fit_occlusion_bias_m).
 Eigen::Matrix3d fit_information(const SceneEstimator::State& s,
                                 const estimator::TranslationIcp& icp,
                                 const estimator::BoxObservation& o, const ObservedPoints& all,
-                                const Eigen::Vector3d& position, double occluded_share) {
-  const estimator::PlaneResiduals fit = icp.plane_residuals(all.points, position, &all.normals);
+                                const Eigen::Vector3d& position, double occluded_share,
+                                double plane_gate) {
+  const estimator::PlaneResiduals fit =
+      icp.plane_residuals(all.points, position, &all.normals, plane_gate);
   if (fit.matched == 0) return Eigen::Matrix3d::Zero();
   std::vector<double> residuals, depths;
   std::vector<double> grid(o.depth.size(), std::numeric_limits<double>::quiet_NaN());
@@ -149,10 +151,25 @@ Eigen::Matrix3d fit_information(const SceneEstimator::State& s,
   const auto middle = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
   std::nth_element(depths.begin(), middle, depths.end());
   const double sensor_variance = std::max(estimator::depth_variance(noise, *middle), floor);
-  return estimator::pixel_information(fit.normal_information, fit.matched, sensor_variance,
-                                      noise.correlated_pixels,
-                                      std::max(systematic, residual_variance - sensor_variance),
-                                      bias);
+  return estimator::pixel_information(
+      fit.normal_information, fit.matched, sensor_variance, noise.correlated_pixels,
+      std::max(systematic, residual_variance - sensor_variance), bias);
+}
+
+// The point-to-plane distance beyond which the last steps of the fit at every pixel match no
+// observed point (EstimateOptions::icp_plane_gate_sigmas): that many robust sigmas of the
+// residuals at `position`; infinite when off or nothing matched.
+double fit_plane_gate(const SceneEstimator::State& s, const estimator::TranslationIcp& icp,
+                      const ObservedPoints& all, const Eigen::Vector3d& position) {
+  if (s.options.icp_plane_gate_sigmas <= 0) return std::numeric_limits<double>::infinity();
+  const estimator::PlaneResiduals fit = icp.plane_residuals(all.points, position, &all.normals);
+  std::vector<double> residuals;
+  for (const double r : fit.residual_m)
+    if (!std::isnan(r)) residuals.push_back(r);
+  if (residuals.empty()) return std::numeric_limits<double>::infinity();
+  const double floor = s.options.min_residual_m * s.options.min_residual_m;
+  return s.options.icp_plane_gate_sigmas *
+         std::sqrt(std::max(estimator::robust_variance(residuals), floor));
 }
 
 // The free-space test of the full model of obj_id at (rotation, translation) over the detection
@@ -233,18 +250,29 @@ bool fit_by_icp(SceneEstimator::State& s, const SceneFrame& frame,
   const Eigen::Vector3d fused_camera = frame.support_to_camera * fused.mean;
   const estimator::IcpResult refined =
       icp.align(all.points, fused_camera, &all.normals, kAllPixelIterations);
-  const Eigen::Vector3d position = !refined.too_few_correspondences && refined.position.allFinite()
-                                       ? refined.position
-                                       : fused_camera;
+  Eigen::Vector3d position = !refined.too_few_correspondences && refined.position.allFinite()
+                                 ? refined.position
+                                 : fused_camera;
+  // Then without the surfaces that are not the model's (EstimateOptions::icp_plane_gate_sigmas).
+  const double plane_gate = fit_plane_gate(s, icp, all, position);
+  if (std::isfinite(plane_gate)) {
+    const estimator::IcpResult gated =
+        icp.align(all.points, position, &all.normals, kAllPixelIterations, plane_gate);
+    if (!gated.too_few_correspondences && gated.position.allFinite()) position = gated.position;
+  }
   // The share of the model's silhouette at the fit that nearer surfaces hide: occlusion
-  // boundaries bias the fit (EstimateOptions::fit_occlusion_bias_m).
+  // boundaries bias the fit (EstimateOptions::fit_occlusion_bias_m; a render, only when on).
   const double occluded_share =
-      free_space_count(s, object->obj_id, object->rotation,
-                       position - object->rotation * object->model_centre, *object->observation)
-          .occluded_share();
+      options.fit_occlusion_bias_m > 0
+          ? free_space_count(s, object->obj_id, object->rotation,
+                             position - object->rotation * object->model_centre,
+                             *object->observation)
+                .occluded_share()
+          : 0.0;
   const Eigen::Matrix3d to_support = frame.camera_to_support.linear();
   const Eigen::Matrix3d information =
-      to_support * fit_information(s, icp, *object->observation, all, position, occluded_share) *
+      to_support *
+      fit_information(s, icp, *object->observation, all, position, occluded_share, plane_gate) *
       to_support.transpose();
   estimator::GaussianMixture spread = belief;
   spread.variances = Eigen::Vector3d::Constant(options.proposal_min_bandwidth_m *
@@ -316,15 +344,7 @@ void refine_and_fuse(SceneEstimator::State& s, const SceneFrame& frame, const Sc
       mean = estimator::mixture_mean(belief);
       covariance = estimator::belief_bound(belief);
     }
-    // Isotropic, so the same in the support frame.
-    covariance += estimator::model_misfit_covariance(s.misfit.translation_m,
-                                                     s.misfit.rotation_deg * EIGEN_PI / 180.0,
-                                                     0.5 * s.dataset.model(object.obj_id).diameter);
-    covariance = 0.5 * (covariance + covariance.transpose());
-    const Eigen::Vector3d variance = covariance.diagonal();
     object.position = frame.support_to_camera * mean;
-    object.covariance = covariance;
-    object.variance = variance;
     object.model_translation = object.position - object.rotation * object.model_centre;
     if (!object.amodal) {
       object.seen_through = free_space_count(s, object.obj_id, object.rotation,
@@ -334,6 +354,20 @@ void refine_and_fuse(SceneEstimator::State& s, const SceneFrame& frame, const Sc
     object.consistent =
         (!object.seen_through || *object.seen_through <= options.max_seen_through) &&
         (!object.belief_shift || *object.belief_shift <= options.max_belief_shift);
+    if (!object.consistent) {
+      // The fit and the rest of the evidence disagree, and either may be the wrong one: the
+      // covariance covers the belief too, around its mean.
+      const Eigen::Vector3d to_belief = estimator::mixture_mean(belief) - mean;
+      covariance += estimator::belief_bound(belief) + to_belief * to_belief.transpose();
+    }
+    // Isotropic, so the same in the support frame.
+    covariance += estimator::model_misfit_covariance(s.misfit.translation_m,
+                                                     s.misfit.rotation_deg * EIGEN_PI / 180.0,
+                                                     0.5 * s.dataset.model(object.obj_id).diameter);
+    covariance = 0.5 * (covariance + covariance.transpose());
+    const Eigen::Vector3d variance = covariance.diagonal();
+    object.covariance = covariance;
+    object.variance = variance;
     object.confident = (variance.array() <= threshold_m2).all() && object.consistent;
     object.error_m = (object.position - truth).norm();
     object.error_support_m = mean - frame.position[object.gt_id];

@@ -2,6 +2,7 @@
 // (jobs/estimate_job.hpp). Also the estimator's flags, shared with the commands
 // that estimate (bench calibration, simulate).
 
+#include <clutterscope/batch/formats.hpp>
 #include <clutterscope/cli/dataset_options.hpp>
 #include <clutterscope/jobs/estimate_job.hpp>
 #include <cstdint>
@@ -53,6 +54,13 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
       "ICP post-processing: measured points farther than this from the model are not matched "
       "(mm, > 0, default 10)");
   command
+      .add_option("--icp-plane-gate", e.icp_plane_gate_sigmas,
+                  "ICP post-processing: the last steps of the fit at every pixel match only "
+                  "measured points within this many robust sigmas of the fit's residuals from "
+                  "the model's tangent plane, so that neighbouring surfaces do not pull it "
+                  "(>= 0; 0 = off)")
+      ->capture_default_str();
+  command
       .add_option("--max-seen-through", e.max_seen_through,
                   "consistency check: an ICP-refined estimate is confident only if the sensor sees "
                   "more than 1 cm past its surface on at most this share of its pixels in the "
@@ -79,13 +87,13 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
       "--fit-systematic-mm", [&e](double mm) { e.fit_systematic_m = 1e-3 * mm; },
       "the part of the ICP fit's residual that is the same on every pixel and does not average "
       "(mm, >= 0; default " +
-          std::to_string(1e3 * scene_estimation::kFitSystematicM).substr(0, 4) + ")");
+          batch::format_general(1e3 * scene_estimation::kFitSystematicM, 3) + ")");
   command.add_option_function<double>(
       "--fit-occlusion-bias-mm", [&e](double mm) { e.fit_occlusion_bias_m = 1e-3 * mm; },
       "the bias occlusion boundaries give the ICP fit of a model whose silhouette is entirely "
       "hidden (mm, >= 0; its variance scales with the hidden share, and a direction that a share "
       "m of the fit's normals faces moves by it over m; default " +
-          std::to_string(1e3 * scene_estimation::kFitOcclusionBiasM).substr(0, 5) + ")");
+          batch::format_general(1e3 * scene_estimation::kFitOcclusionBiasM, 3) + ")");
   command.add_option_function<double>(
       "--correlated-pixels", [&e](double pixels) { e.correlated_pixels = pixels; },
       "the ICP fit's depth errors count as one per this many image pixels (>= 1; larger: "

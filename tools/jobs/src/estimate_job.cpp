@@ -390,6 +390,7 @@ nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
   fingerprint["proxy_tolerance_mm"] = 1e3 * e.proxy_tolerance_m;
   fingerprint["bandwidth_floor_mm"] = 1e3 * e.min_bandwidth_m;
   fingerprint["icp_max_distance_mm"] = 1e3 * e.icp_max_distance_m;
+  fingerprint["icp_plane_gate_sigmas"] = e.icp_plane_gate_sigmas;
   // Always recorded: folders of earlier runs, which used aabb without saying so, do not resume.
   fingerprint["non_contact"] = to_string(e.non_contact);
   if (!e.non_contact_edges) fingerprint["non_contact_edges"] = false;

@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -73,20 +74,24 @@ class TranslationIcp {
   // result keeps the last position and converged = false.
   // observed_normals (3 x K, unit or zero where unknown), when given, reject correspondences
   // between surfaces at an angle (min_normal_cosine). max_iterations > 0 replaces the
-  // options' (a few steps from a start that is already close).
+  // options' (a few steps from a start that is already close). Observed points farther than
+  // max_plane_distance from the tangent plane of their model point are not matched either.
   IcpResult align(const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& initial,
-                  const Eigen::Matrix3Xd* observed_normals = nullptr, int max_iterations = 0) const;
+                  const Eigen::Matrix3Xd* observed_normals = nullptr, int max_iterations = 0,
+                  double max_plane_distance = std::numeric_limits<double>::infinity()) const;
 
   // The residuals of every observed point at `position` (no refinement), e.g. every valid
   // pixel of the box at the fused estimate, for the fit's information per pixel.
-  PlaneResiduals plane_residuals(const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& position,
-                                 const Eigen::Matrix3Xd* observed_normals = nullptr) const;
+  PlaneResiduals plane_residuals(
+      const Eigen::Matrix3Xd& observed, const Eigen::Vector3d& position,
+      const Eigen::Matrix3Xd* observed_normals = nullptr,
+      double max_plane_distance = std::numeric_limits<double>::infinity()) const;
 
  private:
   // The model point observed point i (query = point - position) corresponds to, if any.
   bool correspond(const Eigen::Vector3d& query, const Eigen::Vector3d& position,
-                  const Eigen::Matrix3Xd* observed_normals, int i, uint32_t* nearest,
-                  double* distance_sq) const;
+                  const Eigen::Matrix3Xd* observed_normals, int i, double max_plane_distance,
+                  uint32_t* nearest, double* distance_sq) const;
 
   struct Tree;
   std::unique_ptr<Tree> tree_;
