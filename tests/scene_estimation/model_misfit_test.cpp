@@ -55,8 +55,8 @@ TEST(ModelMisfit, ComesFromTheOptionsTheSensorTheDatasetOrTheRealDataDefault) {
 }
 
 TEST(ModelMisfit, FitConstantsMustBeFiniteAndNonNegative) {
-  for (const double bad : {-1e-4, std::numeric_limits<double>::infinity(),
-                           std::numeric_limits<double>::quiet_NaN()}) {
+  for (const double bad :
+       {-1e-4, std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()}) {
     EstimateOptions options;
     std::string why;
     options.fit_systematic_m = bad;
@@ -66,10 +66,15 @@ TEST(ModelMisfit, FitConstantsMustBeFiniteAndNonNegative) {
     options.fit_occlusion_bias_m = bad;
     EXPECT_FALSE(options.IsValid(&why));
     EXPECT_NE(why.find("--fit-occlusion-bias-mm"), std::string::npos) << why;
+    options = EstimateOptions{};
+    options.icp_plane_gate_sigmas = bad;
+    EXPECT_FALSE(options.IsValid(&why));
+    EXPECT_NE(why.find("--icp-plane-gate"), std::string::npos) << why;
   }
   EstimateOptions zero;
   zero.fit_systematic_m = 0;
   zero.fit_occlusion_bias_m = 0;
+  zero.icp_plane_gate_sigmas = 0;  // off
   EXPECT_TRUE(zero.IsValid(nullptr));
 }
 
