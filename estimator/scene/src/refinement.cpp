@@ -97,6 +97,16 @@ ObservedPoints observed_points(const estimator::BoxObservation& o, int limit) {
   return out;
 }
 
+// The robust variance of a fit's residuals (the NaN of unmatched points left out), at least
+// EstimateOptions::min_residual_m squared.
+double residual_variance(const EstimateOptions& options, const std::vector<double>& residuals) {
+  std::vector<double> matched;
+  for (const double r : residuals)
+    if (!std::isnan(r)) matched.push_back(r);
+  return std::max(estimator::robust_variance(std::move(matched)),
+                  options.min_residual_m * options.min_residual_m);
+}
+
 // The fit's information about the object's position (camera frame) from every valid pixel of
 // its box at the fused estimate (estimator::pixel_information): the point-to-plane residuals
 // of the pixels that correspond to the model (within plane_gate of its surface), the noise of
@@ -113,23 +123,22 @@ Eigen::Matrix3d fit_information(const SceneEstimator::State& s,
   const estimator::PlaneResiduals fit =
       icp.plane_residuals(all.points, position, &all.normals, plane_gate);
   if (fit.matched == 0) return Eigen::Matrix3d::Zero();
-  std::vector<double> residuals, depths;
+  std::vector<double> depths;
   std::vector<double> grid(o.depth.size(), std::numeric_limits<double>::quiet_NaN());
   for (std::size_t i = 0; i < fit.residual_m.size(); ++i) {
     if (std::isnan(fit.residual_m[i])) continue;
-    residuals.push_back(fit.residual_m[i]);
     depths.push_back(all.points(2, static_cast<Eigen::Index>(i)));
     grid[static_cast<std::size_t>(all.pixels[i])] = fit.residual_m[i];
   }
   const double floor = s.options.min_residual_m * s.options.min_residual_m;
-  const double residual_variance = std::max(estimator::robust_variance(residuals), floor);
+  const double variance = residual_variance(s.options, fit.residual_m);
   const std::optional<double>& correlated = s.options.correlated_pixels;
   const double systematic = s.options.fit_systematic_m * s.options.fit_systematic_m;
   const double bias =
       s.options.fit_occlusion_bias_m * s.options.fit_occlusion_bias_m * occluded_share;
   if (!s.noise.described) {
     return estimator::pixel_information(
-        fit.normal_information, fit.matched, residual_variance,
+        fit.normal_information, fit.matched, variance,
         correlated ? *correlated
                    : estimator::correlated_pixels_from_residuals(grid, o.width, o.height),
         systematic, bias);
@@ -151,9 +160,9 @@ Eigen::Matrix3d fit_information(const SceneEstimator::State& s,
   const auto middle = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
   std::nth_element(depths.begin(), middle, depths.end());
   const double sensor_variance = std::max(estimator::depth_variance(noise, *middle), floor);
-  return estimator::pixel_information(
-      fit.normal_information, fit.matched, sensor_variance, noise.correlated_pixels,
-      std::max(systematic, residual_variance - sensor_variance), bias);
+  return estimator::pixel_information(fit.normal_information, fit.matched, sensor_variance,
+                                      noise.correlated_pixels,
+                                      std::max(systematic, variance - sensor_variance), bias);
 }
 
 // The point-to-plane distance beyond which the last steps of the fit at every pixel match no
@@ -163,13 +172,8 @@ double fit_plane_gate(const SceneEstimator::State& s, const estimator::Translati
                       const ObservedPoints& all, const Eigen::Vector3d& position) {
   if (s.options.icp_plane_gate_sigmas <= 0) return std::numeric_limits<double>::infinity();
   const estimator::PlaneResiduals fit = icp.plane_residuals(all.points, position, &all.normals);
-  std::vector<double> residuals;
-  for (const double r : fit.residual_m)
-    if (!std::isnan(r)) residuals.push_back(r);
-  if (residuals.empty()) return std::numeric_limits<double>::infinity();
-  const double floor = s.options.min_residual_m * s.options.min_residual_m;
-  return s.options.icp_plane_gate_sigmas *
-         std::sqrt(std::max(estimator::robust_variance(residuals), floor));
+  if (fit.matched == 0) return std::numeric_limits<double>::infinity();
+  return s.options.icp_plane_gate_sigmas * std::sqrt(residual_variance(s.options, fit.residual_m));
 }
 
 // The free-space test of the full model of obj_id at (rotation, translation) over the detection
