@@ -87,10 +87,8 @@ Eigen::Matrix3d pixel_information(const Eigen::Matrix3d& normal_sum, int pixels,
   const double per_pixel = correlated_pixels * noise_variance + n * excess_variance;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> mean_normals(
       0.5 * (normal_sum + normal_sum.transpose()) / n);
-  const Eigen::Vector3d information =
-      mean_normals.eigenvalues().unaryExpr([&](double m) {
-        return m > 0 ? n * m * m / (per_pixel * m + n * bias_variance) : 0.0;
-      });
+  const Eigen::Vector3d information = mean_normals.eigenvalues().unaryExpr(
+      [&](double m) { return m > 0 ? n * m * m / (per_pixel * m + n * bias_variance) : 0.0; });
   const Eigen::Matrix3d& u = mean_normals.eigenvectors();
   const Eigen::Matrix3d j = u * information.asDiagonal() * u.transpose();
   return 0.5 * (j + j.transpose());
@@ -105,6 +103,17 @@ Eigen::Matrix3d belief_bound(const GaussianMixture& belief) {
   const Eigen::Matrix3d spread = offsets * offsets.transpose() / static_cast<double>(belief.size());
   const double ess = std::max(1.0, effective_sample_size(belief.weights));
   return weighted + spread / ess;
+}
+
+Eigen::Matrix3d other_fits_spread(const Eigen::Vector3d& estimate,
+                                  const std::vector<Eigen::Vector3d>& others) {
+  if (!estimate.allFinite()) throw std::invalid_argument("other fits: the estimate is not finite");
+  Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& fit : others) {
+    if (!fit.allFinite()) throw std::invalid_argument("other fits: a fit is not finite");
+    spread += (fit - estimate) * (fit - estimate).transpose();
+  }
+  return spread / static_cast<double>(1 + others.size());
 }
 
 namespace {

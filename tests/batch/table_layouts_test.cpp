@@ -16,7 +16,7 @@ TEST(TableLayouts, HeadersAsWritten) {
             "split,scene_id,im_id,gt_id,obj_id,label,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,"
             "var_z_cm2,cov_xy_cm2,cov_xz_cm2,cov_yz_cm2,confident,err_cm,init_err_cm,err_x_cm,"
             "err_y_cm,err_z_cm,nees,radius95_cm,confident_radius,ess_min,seen_through,"
-            "belief_shift,consistent,time_ms");
+            "belief_shift,consistent,other_fits,time_ms");
   EXPECT_EQ(bop_results_table().header(), "scene_id,im_id,obj_id,score,R,t,time");
   EXPECT_EQ(belief_samples_table().header(), "gt_id,obj_id,iteration,x_mm,y_mm,z_mm,weight");
   EXPECT_EQ(report_objects_table().header(),

@@ -99,7 +99,8 @@ TEST(FitInformation, PixelInformationCountsEveryPixelAndTheExcessOnce) {
   // An excess of 1 mm^2 on every pixel does not average: variance 1e-6 + 4e-6 / 1000.
   j = pixel_information(h, 1000, 4e-6, 1.0, 1e-6, 0.0);
   EXPECT_NEAR(1 / j(2, 2), 1e-6 + 4e-6 / 1000, 1e-15);
-  EXPECT_EQ(pixel_information(Eigen::Matrix3d::Zero(), 0, 4e-6, 1.0, 0.0, 0.0), Eigen::Matrix3d::Zero());
+  EXPECT_EQ(pixel_information(Eigen::Matrix3d::Zero(), 0, 4e-6, 1.0, 0.0, 0.0),
+            Eigen::Matrix3d::Zero());
   EXPECT_THROW(pixel_information(h, 1000, 0.0, 1.0, 0.0, 0.0), std::invalid_argument);
   EXPECT_THROW(pixel_information(h, 1000, 4e-6, 0.5, 0.0, 0.0), std::invalid_argument);
   EXPECT_THROW(pixel_information(h, 1000, 4e-6, 1.0, -1e-6, 0.0), std::invalid_argument);
@@ -157,6 +158,33 @@ TEST(BeliefBound, CollapsedWeightsKeepTheParticlesSpread) {
   EXPECT_NEAR(b(0, 0), 0.5e-6 + 1e-8, 1e-15);
   EXPECT_NEAR(b(1, 1), 0.5e-6 + 1e-8, 1e-15);
   EXPECT_NEAR(b(2, 2), 1e-8, 1e-15);
+}
+
+TEST(OtherFitsSpread, OneOtherFitLiesAtNeesTwoAlongItsDirection) {
+  const Eigen::Vector3d estimate(0.1, -0.2, 0.7);
+  EXPECT_TRUE(other_fits_spread(estimate, {}).isZero(0));
+  const Eigen::Vector3d d(0.03, 0.04, 0.0);  // 5 cm in the support plane
+  const Eigen::Matrix3d spread = other_fits_spread(estimate, {estimate + d});
+  EXPECT_TRUE(spread.isApprox(0.5 * d * d.transpose(), 1e-15));
+  // With the spread and a small isotropic rest, the other fit is inside the 95% ellipsoid
+  // (NEES ~ 2 <= 7.81), where the rest alone put it at NEES ~ 1e5.
+  const Eigen::Matrix3d rest = Eigen::Matrix3d::Identity() * 1e-8;
+  EXPECT_NEAR(d.dot((spread + rest).ldlt().solve(d)), 2.0, 1e-3);
+  EXPECT_GT(d.dot(rest.ldlt().solve(d)), 1e5);
+}
+
+TEST(OtherFitsSpread, EqualWeightsAboutTheEstimateNotAboutTheirMean) {
+  const Eigen::Vector3d estimate = Eigen::Vector3d::Zero();
+  // Two fits 2 cm either side along x and one 3 cm along y: (4 + 4) / 4 and 9 / 4 cm^2.
+  const Eigen::Matrix3d spread = other_fits_spread(
+      estimate,
+      {Eigen::Vector3d(0.02, 0, 0), Eigen::Vector3d(-0.02, 0, 0), Eigen::Vector3d(0, 0.03, 0)});
+  EXPECT_NEAR(spread(0, 0), 8e-4 / 4, 1e-15);
+  EXPECT_NEAR(spread(1, 1), 9e-4 / 4, 1e-15);
+  EXPECT_NEAR(spread(0, 1), 0.0, 1e-15);
+  EXPECT_NEAR(spread(2, 2), 0.0, 1e-15);
+  EXPECT_THROW(other_fits_spread(estimate, {Eigen::Vector3d(kNaN, 0, 0)}), std::invalid_argument);
+  EXPECT_THROW(other_fits_spread(Eigen::Vector3d(kNaN, 0, 0), {}), std::invalid_argument);
 }
 
 TEST(InformationMaximum, CommutingSourcesTakeTheMorePreciseInEachDirection) {

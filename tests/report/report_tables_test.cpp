@@ -78,10 +78,10 @@ TEST_F(ReportTables, ReadsTheCalibrationColumnsAndKeepsThemThroughTheJoin) {
   const std::string estimates =
       "split,scene_id,im_id,gt_id,obj_id,label,x_mm,y_mm,z_mm,var_x_cm2,var_y_cm2,var_z_cm2,"
       "confident,err_cm,init_err_cm,err_x_cm,err_y_cm,err_z_cm,nees,radius95_cm,"
-      "confident_radius,ess_min,seen_through,belief_shift,consistent,time_ms\n"
-      "test,1,0,1,7,lemon tea,10.5,-20,650,1.5,0.25,3,0,2.5,4,1.5,-2,0,,4.84,0,12.5,0.4,30,0,30\n"
+      "confident_radius,ess_min,seen_through,belief_shift,consistent,other_fits,time_ms\n"
+      "test,1,0,1,7,lemon tea,10.5,-20,650,1.5,0.25,3,0,2.5,4,1.5,-2,0,,4.84,0,12.5,0.4,30,0,2,30\n"
       "test,1,0,0,3,coffee,1,2,700,0.01,0.02,0.005,1,0.4,1.2,0.1,-0.2,0.3,20,0.395,1,50,0.01,1.5,"
-      "1,31\n";
+      "1,0,31\n";
   auto objects = read_objects_csv(file("objects.csv", kObjectsCsv));
   join_estimates(objects, read_estimates_csv(file("estimates.csv", estimates)),
                  dir_ / "estimates.csv");

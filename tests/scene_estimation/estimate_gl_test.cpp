@@ -207,11 +207,11 @@ TEST_F(EstimateGl, JobsOneAndTwoGiveByteIdenticalOutputs) {
     EXPECT_EQ(read_file(one / file), read_file(two / file)) << file;
   const auto rows = read_csv(one / "estimates.csv");
   ASSERT_GE(rows.size(), 2u);
-  EXPECT_EQ(rows[0].size(), 29u);
+  EXPECT_EQ(rows[0].size(), 30u);
   EXPECT_EQ(read_file(one / "estimates.csv").find("nan"), std::string::npos);
   int estimated = 0;
   for (std::size_t r = 1; r < rows.size(); ++r) {
-    ASSERT_EQ(rows[r].size(), 29u) << r;
+    ASSERT_EQ(rows[r].size(), 30u) << r;
     if (!rows[r][6].empty()) ++estimated;
   }
   EXPECT_GE(estimated, 6);
@@ -468,7 +468,7 @@ TEST_F(EstimateGl, BadInputIsRecordedPerObjectWithoutNaN) {
       << summary.at("image_failures").dump();
   // Every object of image (0, 0) failed: its rows have empty numeric fields.
   for (const auto& row : read_csv(out / "estimates.csv")) {
-    EXPECT_EQ(row.size(), 29u) << "every row has the 29 columns of the header";
+    EXPECT_EQ(row.size(), 30u) << "every row has the 30 columns of the header";
     if (row[1] == "0" && row[2] == "0") {
       EXPECT_TRUE(row[6].empty());
       EXPECT_TRUE(row[9].empty());
@@ -594,6 +594,67 @@ TEST(EstimateHiddenGl, CompletelyHiddenObjectsGetAnEstimateThroughTheGraph) {
       EXPECT_TRUE(value.first.empty()) << key << ": without amodal boxes it has no detection";
     }
   }
+}
+
+// --other-fit-steps: on pile scenes where some objects show a sliver, the search finds other
+// fits that explain the box's depth as well as the estimate. It never moves an estimate or
+// changes a decision of the consistency checks; an estimate with other fits has a wider
+// covariance (every such fit's offset is inside the new 95% ellipsoid's reach: NEES cannot
+// grow), one without any keeps its covariance to the last digit, and 0 turns the search off.
+TEST(EstimateOtherFitsGl, OtherFitsThatExplainTheDepthWidenTheCovarianceOnly) {
+  std::string why;
+  if (!render::egl_available(&why)) CLUTTERSCOPE_SKIP_OR_FAIL("EGL") << "no EGL device: " << why;
+  const fs::path data = fresh_dir("estimate_other_fits_dataset");
+  const CommandRun generated =
+      run_merged("generate --out " + data.string() +
+                 " --preset pile --scenes 4 --objects 6 --views 1 --width 320 --height 240 --seed "
+                 "1 --quiet");
+  ASSERT_EQ(generated.exit_code, 0) << generated.output;
+  const std::string options = " --particles 50 --iterations 5 --icp-samples 5 --quiet --no-time";
+  const auto run_with = [&](const std::string& name, const std::string& extra) {
+    const fs::path out = fresh_dir(name);
+    const CommandRun run =
+        run_merged("estimate " + data.string() + " --out " + out.string() + options + extra);
+    EXPECT_EQ(run.exit_code, 0) << run.output;
+    return read_csv(out / "estimates.csv");
+  };
+  const auto searched = run_with("estimate_other_fits_on", "");
+  const auto off = run_with("estimate_other_fits_off", " --other-fit-steps 0");
+  ASSERT_EQ(searched.size(), off.size());
+  std::map<std::string, std::size_t> column;
+  for (std::size_t c = 0; c < searched[0].size(); ++c) column[searched[0][c]] = c;
+  ASSERT_TRUE(column.count("other_fits"));
+  const auto value = [&](const std::vector<std::string>& row, const char* name) {
+    return std::stod(row[column.at(name)]);
+  };
+  int with_others = 0;
+  for (std::size_t r = 1; r < searched.size(); ++r) {
+    const auto& on = searched[r];
+    const auto& before = off[r];
+    if (on[column.at("var_x_cm2")].empty()) continue;
+    EXPECT_EQ(before[column.at("other_fits")], "0") << r;
+    for (const char* same : {"x_mm", "y_mm", "z_mm", "err_cm", "consistent", "belief_shift"})
+      EXPECT_EQ(on[column.at(same)], before[column.at(same)]) << "row " << r << " " << same;
+    if (on[column.at("other_fits")] == "0") {
+      for (const char* same : {"var_x_cm2", "var_y_cm2", "var_z_cm2", "cov_xy_cm2", "nees"})
+        EXPECT_EQ(on[column.at(same)], before[column.at(same)]) << "row " << r << " " << same;
+      continue;
+    }
+    ++with_others;
+    EXPECT_GT(value(on, "var_x_cm2") + value(on, "var_y_cm2"),
+              value(before, "var_x_cm2") + value(before, "var_y_cm2"))
+        << r;
+    EXPECT_LE(value(on, "nees"), value(before, "nees") * (1 + 1e-5)) << r;
+    if (on[column.at("confident")] == "1") {
+      EXPECT_EQ(before[column.at("confident")], "1") << r;
+    }
+  }
+  EXPECT_GE(with_others, 1) << "seed 1: pile scenes with slivers to search";
+  const fs::path bad = fresh_dir("estimate_other_fits_bad");
+  EXPECT_EQ(run_merged("estimate " + data.string() + " --out " + bad.string() + options +
+                       " --other-fit-steps -1")
+                .exit_code,
+            2);
 }
 
 }  // namespace

@@ -60,6 +60,30 @@ std::shared_ptr<estimator::BoxObservation> box_observation(const cv::Mat& depth,
   return o;
 }
 
+// The depth of `box` grown on every side by radius_m projected at the median valid depth of the
+// box, clipped to the image, every pixel (ObjectEstimate::surroundings).
+std::shared_ptr<estimator::BoxObservation> surroundings_observation(const cv::Mat& depth,
+                                                                    const Eigen::Matrix3d& k,
+                                                                    const cv::Rect& box,
+                                                                    double radius_m) {
+  std::vector<float> valid;
+  for (int v = box.y; v < box.y + box.height; ++v)
+    for (int u = box.x; u < box.x + box.width; ++u)
+      if (depth.at<float>(v, u) > 0) valid.push_back(depth.at<float>(v, u));
+  int grow = 0;
+  if (!valid.empty()) {
+    const auto middle = valid.begin() + static_cast<std::ptrdiff_t>(valid.size() / 2);
+    std::nth_element(valid.begin(), middle, valid.end());
+    grow = static_cast<int>(std::ceil(std::max(k(0, 0), k(1, 1)) * radius_m / *middle));
+  }
+  const cv::Rect grown =
+      cv::Rect(box.x - grow, box.y - grow, box.width + 2 * grow, box.height + 2 * grow) &
+      cv::Rect(0, 0, depth.cols, depth.rows);
+  auto o = box_observation(depth, k, grown, 1);
+  o->stride = 1;
+  return o;
+}
+
 // Instances on or below a cycle of support relations (Kahn's algorithm leaves them).
 std::set<int> support_cycle_members(int count, const std::vector<std::pair<int, int>>& support) {
   std::vector<int> indegree(static_cast<std::size_t>(count), 0);
@@ -188,6 +212,9 @@ void initialise_from_boxes(SceneEstimator::State& s, const datasets::SceneView& 
     object->observation = observations[best];
     if (object->observation->valid_pixels() == 0)
       throw std::invalid_argument("the detection box has no depth on its scoring grid");
+    if (!object->amodal)
+      object->surroundings = surroundings_observation(observed.depth, view.camera.K, own[best].box,
+                                                      0.5 * model.diameter);
   } catch (const std::invalid_argument& error) {
     object->failure = error.what();
   }

@@ -86,6 +86,7 @@ const TableLayout& estimates_table() {
                                    later("seen_through"),
                                    later("belief_shift"),
                                    later("consistent"),
+                                   later("other_fits"),
                                    later("time_ms")}};
   return layout;
 }

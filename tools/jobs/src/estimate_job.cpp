@@ -104,8 +104,9 @@ class EstimateWorker {
       }
       row.add(object.belief_shift ? batch::format_general(*object.belief_shift, 6) : "");
       row.add(object.consistent ? "1" : "0");
+      row.add(object.other_fits);
     } else {
-      for (int column = 0; column < 22; ++column) row.add("");  // x_mm .. consistent
+      for (int column = 0; column < 23; ++column) row.add("");  // x_mm .. other_fits
     }
     if (job_.no_time) {
       row.add("");
@@ -391,6 +392,7 @@ nlohmann::json estimate_job_fingerprint(const EstimateJobOptions& options,
   fingerprint["bandwidth_floor_mm"] = 1e3 * e.min_bandwidth_m;
   fingerprint["icp_max_distance_mm"] = 1e3 * e.icp_max_distance_m;
   fingerprint["icp_plane_gate_sigmas"] = e.icp_plane_gate_sigmas;
+  fingerprint["other_fit_steps"] = e.other_fit_steps;
   // Always recorded: folders of earlier runs, which used aabb without saying so, do not resume.
   fingerprint["non_contact"] = to_string(e.non_contact);
   if (!e.non_contact_edges) fingerprint["non_contact_edges"] = false;

@@ -68,6 +68,14 @@ Eigen::Matrix3d pixel_information(const Eigen::Matrix3d& normal_sum, int pixels,
 // spread, not the kernel of the one that won.
 Eigen::Matrix3d belief_bound(const GaussianMixture& belief);
 
+// The spread of other fits about an estimate, when the data cannot tell them from it: the
+// second moment about `estimate` of the estimate and the others with equal weights,
+// sum_i (f_i - estimate)(f_i - estimate)^T / (1 + n). Zero for no others; one other at
+// distance d along u gives (d^2 / 2) u u^T, so that the other fit lies at NEES 2 along u.
+// Throws std::invalid_argument for a non-finite position.
+Eigen::Matrix3d other_fits_spread(const Eigen::Vector3d& estimate,
+                                  const std::vector<Eigen::Vector3d>& others);
+
 // The covariance of a position known from two sources that share their data (the fit and a
 // belief from the same depth): in every direction, the more precise of the two and never
 // their product. In the belief's whitened frame (B = L L^T; u_i, l_i the eigenvectors and

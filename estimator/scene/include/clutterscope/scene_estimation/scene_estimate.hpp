@@ -108,6 +108,17 @@ struct EstimateOptions {
   // correspondence distance instead did as well there but cost the real ycbv_real frames
   // (V >= 90% confident 83% -> 75%), whose residuals are wider.
   double icp_plane_gate_sigmas = 2.0;
+  // The search for other fits (--other-fit-steps N, 0 = off): ICP from a (2N+1) x (2N+1) grid
+  // of starts in the support plane around the estimate, a quarter of the model's diameter
+  // apart. A fit that matches as many of the box's points as the estimate (within two sigmas
+  // of a count, 2 sqrt(n)) and that the sensor sees through no more than the estimate (in the
+  // box grown by the model's radius, again within 2 sqrt(n + 1)) explains the depth as well:
+  // a sliver of a mostly hidden object fits several places of its model, and the belief that
+  // chose one may be wrong. The covariance gains the spread of these fits about the estimate
+  // (equal weights), ObjectEstimate::other_fits counts them. In the support plane only: the
+  // support holds the height, and a search along it (tried first on seeds 20261701/02, default
+  // sensor) found fits of side faces the support rules out.
+  int other_fit_steps = 2;
   // The fit's information per valid pixel (estimator::pixel_information): image pixels whose
   // depth errors are one. Unset: the sensor's matching window where the sensor is described
   // (resolve_pixel_noise), else from the neighbour correlation of the fit's residuals
@@ -243,6 +254,13 @@ struct ObjectEstimate {
   // The unary's observation (the best-scoring detection box) and the object's GT centre in
   // the camera frame, for benchmarks and tests.
   std::shared_ptr<const estimator::BoxObservation> observation;
+  // The depth around that box, grown on every side by the model's radius projected at the
+  // box's median depth (clipped to the image), every pixel: where the free-space test of a
+  // position other than the fit's looks (the search for other fits, refinement.cpp).
+  std::shared_ptr<const estimator::BoxObservation> surroundings;
+  // Other fits that explain the box's depth as well as the estimate (EstimateOptions::
+  // other_fit_steps), more than 1 cm from it and from each other; 0 for hidden objects.
+  int other_fits = 0;
   Eigen::Vector3d model_centre = Eigen::Vector3d::Zero();  // model frame
 };
 
