@@ -73,6 +73,10 @@ suite() {
     left_out="$left_out|^(Nbp\.ErrorsShrinkWithParticles|Potentials\.OrientedNonContactAgreesWithBruteForceOverlap|RayCastReference\.OccluderAndTruncation)$"
     left_out="$left_out|^Nbp\.(AdaptiveProposal)?(LoopyGrid2x2MatchesExactJointMarginals|ChainOfFive3DMatchesExactMarginals)$"
     left_out="$left_out|^Product\.GibbsWithManySweepsMatchesExactProduct$"
+    # And two more of the same kind (39 and 30 s there, cold CI run of de64528): the preset noise
+    # statistics repeat the sensor code of Sensor.NoiseOnAFrontalPlaneMatchesTheModel, the
+    # cylinder the decimation of Decimate.SphereMeetsTheCapClosedAndOutward.
+    left_out="$left_out|^(Sensor\.PresetNoiseOnAFrontalPlaneMatchesItsPublishedFormula|Decimate\.CylinderKeepsTheSidesItsChordErrorNeeds)$"
   fi
   # 1. Every test without GL, leaks included (the fuzz regressions are their own step).
   run_ctest -j "$jobs" -L unit -LE "$leave_out" -E "$memory_test|$left_out"
