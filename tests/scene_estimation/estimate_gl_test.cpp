@@ -651,10 +651,13 @@ TEST(EstimateOtherFitsGl, OtherFitsThatExplainTheDepthWidenTheCovarianceOnly) {
   }
   EXPECT_GE(with_others, 1) << "seed 1: pile scenes with slivers to search";
   const fs::path bad = fresh_dir("estimate_other_fits_bad");
-  EXPECT_EQ(run_merged("estimate " + data.string() + " --out " + bad.string() + options +
-                       " --other-fit-steps -1")
-                .exit_code,
-            2);
+  for (const char* steps : {"-1", "9"}) {
+    const auto refused = run_merged("estimate " + data.string() + " --out " + bad.string() +
+                                    options + " --other-fit-steps " + steps);
+    EXPECT_EQ(refused.exit_code, 2) << steps;
+    EXPECT_NE(refused.output.find("--other-fit-steps must be in [0, 8]"), std::string::npos)
+        << refused.output;
+  }
 }
 
 }  // namespace

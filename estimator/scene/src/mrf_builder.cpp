@@ -79,9 +79,7 @@ std::shared_ptr<estimator::BoxObservation> surroundings_observation(const cv::Ma
   const cv::Rect grown =
       cv::Rect(box.x - grow, box.y - grow, box.width + 2 * grow, box.height + 2 * grow) &
       cv::Rect(0, 0, depth.cols, depth.rows);
-  auto o = box_observation(depth, k, grown, 1);
-  o->stride = 1;
-  return o;
+  return box_observation(depth, k, grown, std::max({1, grown.width, grown.height}));  // stride 1
 }
 
 // Instances on or below a cycle of support relations (Kahn's algorithm leaves them).

@@ -73,7 +73,8 @@ bool EstimateOptions::IsValid(std::string* why) const {
   if (!(icp_max_distance_m > 0)) return fail("ICP correspondence distance must be > 0");
   if (!(icp_plane_gate_sigmas >= 0) || !std::isfinite(icp_plane_gate_sigmas))
     return fail("--icp-plane-gate must be a finite number >= 0");
-  if (other_fit_steps < 0) return fail("--other-fit-steps must be >= 0");
+  if (other_fit_steps < 0 || other_fit_steps > kMaxOtherFitSteps)
+    return fail("--other-fit-steps must be in [0, " + std::to_string(kMaxOtherFitSteps) + "]");
   if (!(min_effective_sample_fraction >= 0) || !(min_effective_sample_fraction <= 1))
     return fail("--min-ess-fraction must be in [0, 1]");
   if (correlated_pixels && (!(*correlated_pixels >= 1) || !std::isfinite(*correlated_pixels)))

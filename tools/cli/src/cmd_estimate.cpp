@@ -65,7 +65,7 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
                   "ICP post-processing: also fit from a (2N+1) x (2N+1) grid of starts in the "
                   "support plane, a quarter of the model's diameter apart; the fits that explain "
                   "the depth as well as the estimate widen its covariance by their spread "
-                  "(>= 0; 0 = off)")
+                  "(0-8; 0 = off)")
       ->capture_default_str();
   command
       .add_option("--max-seen-through", e.max_seen_through,

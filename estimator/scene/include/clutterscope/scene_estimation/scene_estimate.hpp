@@ -66,6 +66,9 @@ std::string to_string(NonContactForm form);  // "oriented", "aabb"
 // which chose nothing (docs/method.md, "The plane gate").
 constexpr double kFitSystematicM = 0.000085;
 constexpr double kFitOcclusionBiasM = 0.0;
+// The largest EstimateOptions::other_fit_steps: 8 searches 17 x 17 starts, four model diameters
+// across, per object (289 ICPs), beyond which a fit no longer overlaps the box's depth.
+constexpr int kMaxOtherFitSteps = 8;
 
 struct EstimateOptions {
   Observation observation = Observation::kMeasured;
@@ -112,12 +115,13 @@ struct EstimateOptions {
   // of starts in the support plane around the estimate, a quarter of the model's diameter
   // apart. A fit that matches as many of the box's points as the estimate (within two sigmas
   // of a count, 2 sqrt(n)) and that the sensor sees through no more than the estimate (in the
-  // box grown by the model's radius, again within 2 sqrt(n + 1)) explains the depth as well:
+  // box grown by the model's radius: on at most s + 2 sqrt(s + 1) pixels where it sees through
+  // the estimate on s) explains the depth as well:
   // a sliver of a mostly hidden object fits several places of its model, and the belief that
   // chose one may be wrong. The covariance gains the spread of these fits about the estimate
   // (equal weights), ObjectEstimate::other_fits counts them. In the support plane only: the
   // support holds the height, and a search along it (tried first on seeds 20261701/02, default
-  // sensor) found fits of side faces the support rules out.
+  // sensor) found fits of side faces the support rules out. At most kMaxOtherFitSteps.
   int other_fit_steps = 2;
   // The fit's information per valid pixel (estimator::pixel_information): image pixels whose
   // depth errors are one. Unset: the sensor's matching window where the sensor is described
