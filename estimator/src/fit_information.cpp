@@ -151,6 +151,24 @@ Eigen::Matrix3d information_maximum(const Eigen::Matrix3d& belief_covariance,
   return 0.5 * (covariance + covariance.transpose());
 }
 
+Eigen::Matrix3d covariance_maximum(const Eigen::Matrix3d& a, const Eigen::Matrix3d& c) {
+  const Eigen::Matrix3d symmetric = 0.5 * (a + a.transpose());
+  const Eigen::LLT<Eigen::Matrix3d> cholesky(symmetric);
+  if (!symmetric.allFinite() || cholesky.info() != Eigen::Success)
+    throw std::invalid_argument(
+        "covariance maximum: the first covariance is not positive definite");
+  if (!c.allFinite()) throw std::invalid_argument("covariance maximum: the second is not finite");
+  const Eigen::Matrix3d l = cholesky.matrixL();
+  const Eigen::Matrix3d l_inverse = l.inverse();
+  const Eigen::Matrix3d whitened = l_inverse * c * l_inverse.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(0.5 *
+                                                             (whitened + whitened.transpose()));
+  const Eigen::Vector3d larger = eigen.eigenvalues().cwiseMax(1.0);
+  const Eigen::Matrix3d& u = eigen.eigenvectors();
+  const Eigen::Matrix3d covariance = l * u * larger.asDiagonal() * u.transpose() * l.transpose();
+  return 0.5 * (covariance + covariance.transpose());
+}
+
 Eigen::Vector3d information_maximum_mean(const Eigen::Vector3d& belief_mean,
                                          const Eigen::Matrix3d& belief_covariance,
                                          const Eigen::Vector3d& fit_mean,

@@ -187,6 +187,46 @@ TEST(OtherFitsSpread, EqualWeightsAboutTheEstimateNotAboutTheirMean) {
   EXPECT_THROW(other_fits_spread(Eigen::Vector3d(kNaN, 0, 0), {}), std::invalid_argument);
 }
 
+TEST(CovarianceMaximum, CommutingCovariancesTakeTheLargerInEachDirection) {
+  const Eigen::Matrix3d a = Eigen::Vector3d(4e-6, 1e-6, 9e-6).asDiagonal();
+  const Eigen::Matrix3d c = Eigen::Vector3d(1e-6, 2e-6, 0.0).asDiagonal();
+  EXPECT_TRUE(covariance_maximum(a, c).isApprox(
+      Eigen::Matrix3d(Eigen::Vector3d(4e-6, 2e-6, 9e-6).asDiagonal()), 1e-12));
+  // The same bound twice is that bound (their sum would double it); nothing adds nothing.
+  EXPECT_TRUE(covariance_maximum(a, a).isApprox(a, 1e-12));
+  EXPECT_TRUE(covariance_maximum(a, Eigen::Matrix3d::Zero()).isApprox(a, 1e-12));
+}
+
+TEST(CovarianceMaximum, CoversBothAndNeverExceedsTheirSum) {
+  std::mt19937_64 rng(20261206);
+  std::normal_distribution<double> gaussian(0.0, 1.0);
+  const auto random_matrix = [&] {
+    Eigen::Matrix3d m;
+    for (int i = 0; i < 9; ++i) m(i / 3, i % 3) = 1e-3 * gaussian(rng);
+    return m;
+  };
+  const auto smallest_eigenvalue = [](const Eigen::Matrix3d& m) {
+    return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m).eigenvalues().minCoeff();
+  };
+  for (int trial = 0; trial < 50; ++trial) {
+    const Eigen::Matrix3d ma = random_matrix();
+    const Eigen::Matrix3d a = ma * ma.transpose() + 1e-9 * Eigen::Matrix3d::Identity();
+    const Eigen::Matrix3d mc = random_matrix();
+    const Eigen::Matrix3d c = trial % 2 ? Eigen::Matrix3d(mc * mc.transpose())
+                                        : Eigen::Matrix3d(mc.col(0) * mc.col(0).transpose());
+    const Eigen::Matrix3d m = covariance_maximum(a, c);
+    const double scale = 1e-12 * (a + c).norm();
+    EXPECT_TRUE(m.isApprox(m.transpose(), 1e-12)) << trial;
+    // A <= M, C <= M and M <= A + C in the Loewner order.
+    EXPECT_GE(smallest_eigenvalue(m - a), -scale) << trial;
+    EXPECT_GE(smallest_eigenvalue(m - c), -scale) << trial;
+    EXPECT_GE(smallest_eigenvalue(a + c - m), -scale) << trial;
+  }
+  const Eigen::Matrix3d a = Eigen::Matrix3d::Identity() * 1e-6;
+  EXPECT_THROW(covariance_maximum(Eigen::Matrix3d::Zero(), a), std::invalid_argument);
+  EXPECT_THROW(covariance_maximum(a, Eigen::Matrix3d::Constant(kNaN)), std::invalid_argument);
+}
+
 TEST(InformationMaximum, CommutingSourcesTakeTheMorePreciseInEachDirection) {
   const Eigen::Matrix3d b = Eigen::Vector3d(4e-6, 1e-6, 9e-6).asDiagonal();
   const Eigen::Matrix3d j = Eigen::Vector3d(1e6, 1e5, 0).asDiagonal();

@@ -86,6 +86,16 @@ Eigen::Matrix3d other_fits_spread(const Eigen::Vector3d& estimate,
 Eigen::Matrix3d information_maximum(const Eigen::Matrix3d& belief_covariance,
                                     const Eigen::Matrix3d& fit_information);
 
+// The covariance of a position that two bounds from the same data describe (the spread of the
+// K fits from the belief's samples and the fit's information per pixel: both measure the
+// depth's noise): in every direction the larger of the two, never their sum. In the frame
+// whitened by A (A = L L^T; u_i, c_i the eigenvectors and eigenvalues of L^-1 C L^-T):
+// Sigma = L U diag(max(c, 1)) U^T L^T, the smallest such matrix with Sigma >= A and Sigma >= C.
+// With commuting A and C: per common eigenvector max(a_i, c_i). C = 0 gives A; C = A gives A
+// (their sum would double it). Throws std::invalid_argument for an A that is not positive
+// definite or a C that is not finite.
+Eigen::Matrix3d covariance_maximum(const Eigen::Matrix3d& a, const Eigen::Matrix3d& c);
+
 // The position that goes with information_maximum: along every direction u_i the mean of the
 // source whose variance is taken there, the fit's where l_i >= 1, else the belief's
 // (x = L U (D U^T L^-1 belief_mean + (I - D) U^T L^-1 fit_mean), D = diag(l_i < 1)). With
