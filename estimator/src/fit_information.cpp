@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace clutterscope::estimator {
 
@@ -124,14 +125,20 @@ struct Whitened {
   Eigen::Vector3d information;
 };
 
+// L of a covariance's symmetric part, L L^T; throws std::invalid_argument naming `what` for one
+// that is not positive definite.
+Eigen::Matrix3d cholesky_factor(const Eigen::Matrix3d& covariance, const std::string& what) {
+  const Eigen::Matrix3d symmetric = 0.5 * (covariance + covariance.transpose());
+  const Eigen::LLT<Eigen::Matrix3d> cholesky(symmetric);
+  if (!symmetric.allFinite() || cholesky.info() != Eigen::Success)
+    throw std::invalid_argument(what + " is not positive definite");
+  return cholesky.matrixL();
+}
+
 Whitened whiten(const Eigen::Matrix3d& belief_covariance, const Eigen::Matrix3d& fit_information) {
-  const Eigen::Matrix3d b = 0.5 * (belief_covariance + belief_covariance.transpose());
-  const Eigen::LLT<Eigen::Matrix3d> cholesky(b);
-  if (!b.allFinite() || cholesky.info() != Eigen::Success)
-    throw std::invalid_argument("belief covariance is not positive definite");
-  if (!fit_information.allFinite()) throw std::invalid_argument("fit information is not finite");
   Whitened w;
-  w.l = cholesky.matrixL();
+  w.l = cholesky_factor(belief_covariance, "belief covariance");
+  if (!fit_information.allFinite()) throw std::invalid_argument("fit information is not finite");
   const Eigen::Matrix3d j = 0.5 * (fit_information + fit_information.transpose());
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(w.l.transpose() * j * w.l);
   w.u = eigen.eigenvectors();
@@ -152,13 +159,8 @@ Eigen::Matrix3d information_maximum(const Eigen::Matrix3d& belief_covariance,
 }
 
 Eigen::Matrix3d covariance_maximum(const Eigen::Matrix3d& a, const Eigen::Matrix3d& c) {
-  const Eigen::Matrix3d symmetric = 0.5 * (a + a.transpose());
-  const Eigen::LLT<Eigen::Matrix3d> cholesky(symmetric);
-  if (!symmetric.allFinite() || cholesky.info() != Eigen::Success)
-    throw std::invalid_argument(
-        "covariance maximum: the first covariance is not positive definite");
+  const Eigen::Matrix3d l = cholesky_factor(a, "covariance maximum: the first covariance");
   if (!c.allFinite()) throw std::invalid_argument("covariance maximum: the second is not finite");
-  const Eigen::Matrix3d l = cholesky.matrixL();
   const Eigen::Matrix3d l_inverse = l.inverse();
   const Eigen::Matrix3d whitened = l_inverse * c * l_inverse.transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(0.5 *

@@ -92,9 +92,8 @@ Eigen::Matrix3d information_maximum(const Eigen::Matrix3d& belief_covariance,
 // whitened by A (A = L L^T; u_i, c_i the eigenvectors and eigenvalues of L^-1 C L^-T):
 // Sigma = L U diag(max(c, 1)) U^T L^T, which lies above both and below their sum in the
 // Loewner order (A, C <= Sigma <= A + C). With commuting A and C: per common eigenvector
-// max(a_i, c_i). C = 0 gives A; C = A gives A
-// (their sum would double it). Throws std::invalid_argument for an A that is not positive
-// definite or a C that is not finite.
+// max(a_i, c_i). C = 0 gives A; C = A gives A (their sum would double it). Throws
+// std::invalid_argument for an A that is not positive definite or a C that is not finite.
 Eigen::Matrix3d covariance_maximum(const Eigen::Matrix3d& a, const Eigen::Matrix3d& c);
 
 // The position that goes with information_maximum: along every direction u_i the mean of the
