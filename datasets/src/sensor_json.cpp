@@ -85,6 +85,13 @@ DeclaredNoise parse_sensor_noise(const std::string& text, const std::filesystem:
   noise.disparity_baseline_m = optional_sigma(json, "disparity_baseline_m", 10.0, context);
   noise.disparity_step_px = optional_sigma(json, "disparity_step_px", 10.0, context);
   noise.window_half_px = optional_sigma(json, "window_half_px", 100.0, context);
+  if (json.contains("noise_correlated_pixels")) {
+    noise.correlated_pixels = optional_sigma(json, "noise_correlated_pixels", 1e6, context);
+    if (noise.correlated_pixels < 1)
+      context.fail(
+          "noise_correlated_pixels must be >= 1 (image pixels whose errors are one), got " +
+          std::to_string(noise.correlated_pixels));
+  }
   noise.described = noise.noise_a_m > 0 || noise.noise_b_per_m > 0;
   return noise;
 }
@@ -103,8 +110,15 @@ DeclaredNoise declared_noise(const SensorOptions& options) {
   noise.disparity_baseline_m = options.disparity_baseline_m;
   noise.disparity_step_px = options.disparity_step_px;
   noise.window_half_px = options.window_half_px;
+  noise.correlated_pixels = kSimulatedNoiseCorrelatedPixels;
   noise.described = noise.noise_a_m > 0 || noise.noise_b_per_m > 0;
   return noise;
+}
+
+nlohmann::json generated_sensor_json(const SensorOptions& options) {
+  nlohmann::json json = to_json(options);
+  json["noise_correlated_pixels"] = kSimulatedNoiseCorrelatedPixels;
+  return json;
 }
 
 }  // namespace clutterscope::datasets

@@ -489,12 +489,20 @@ TEST(Sensor, SensorJsonDeclaresTheModelMisfit) {
   }
 }
 
-// sensor.json as generate writes it describes the per-pixel noise the estimator's fit counts
-// (the preset's fields back); without noise coefficients it describes none; bad values are
-// refused naming the file and field.
+// sensor.json describes the per-pixel noise the estimator's fit counts (the preset's fields
+// back); without noise coefficients it describes none; bad values are refused naming the file
+// and field. A sensor's description declares no noise correlation (its matching window
+// decides); data the simulator made, whose noise is drawn per pixel, declares 1.
 TEST(Sensor, SensorJsonDescribesThePixelNoise) {
   const SensorOptions preset = sensor_preset("xtion");
-  const DeclaredNoise xtion = parse_sensor_noise(to_json(preset).dump(), "s.json");
+  const DeclaredNoise sensor = parse_sensor_noise(to_json(preset).dump(), "s.json");
+  EXPECT_EQ(sensor.correlated_pixels, 0);
+  const DeclaredNoise xtion = parse_sensor_noise(generated_sensor_json(preset).dump(), "s.json");
+  EXPECT_EQ(xtion.correlated_pixels, 1);
+  EXPECT_EQ(declared_noise(preset).correlated_pixels, 1);
+  EXPECT_EQ(parse_sensor_noise(R"({"noise_a_m": 0.001, "noise_correlated_pixels": 69})", "s.json")
+                .correlated_pixels,
+            69);
   EXPECT_TRUE(xtion.described);
   EXPECT_DOUBLE_EQ(xtion.noise_a_m, preset.noise_a_m);
   EXPECT_DOUBLE_EQ(xtion.noise_b_per_m, preset.noise_b_per_m);
@@ -510,12 +518,18 @@ TEST(Sensor, SensorJsonDescribesThePixelNoise) {
   EXPECT_FALSE(parse_sensor_noise(R"({"misfit_translation_sigma_m": 0.002})", "s.json").described);
   for (const std::string& bad :
        {std::string(R"({"noise_a_m": 2})"), std::string(R"({"window_half_px": -1})"),
-        std::string(R"({"noise_b_per_m": "x"})")}) {
+        std::string(R"({"noise_b_per_m": "x"})"), std::string(R"({"noise_correlated_pixels": 0})"),
+        std::string(R"({"noise_correlated_pixels": 0.5})"),
+        std::string(R"({"noise_correlated_pixels": 2e6})")}) {
     try {
       parse_sensor_noise(bad, "dir/sensor.json");
       ADD_FAILURE() << "accepted " << bad;
     } catch (const DatasetError& error) {
       EXPECT_NE(std::string(error.what()).find("sensor.json"), std::string::npos) << error.what();
+      if (bad.find("correlated") != std::string::npos) {
+        EXPECT_NE(std::string(error.what()).find("noise_correlated_pixels"), std::string::npos)
+            << error.what();
+      }
     }
   }
 }

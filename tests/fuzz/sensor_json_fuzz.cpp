@@ -1,5 +1,5 @@
-// Fuzz target: a generated dataset's sensor.json, read by estimate for the model misfit it
-// declares (datasets::parse_sensor_misfit).
+// Fuzz target: a dataset's sensor.json, read by estimate for the model misfit and the per-pixel
+// depth noise it declares (datasets::parse_sensor_misfit, datasets::parse_sensor_noise).
 #include <clutterscope/datasets/errors.hpp>
 #include <clutterscope/datasets/sensor.hpp>
 #include <cstddef>
@@ -7,9 +7,13 @@
 #include <string>
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
   try {
-    clutterscope::datasets::parse_sensor_misfit(
-        std::string(reinterpret_cast<const char*>(data), size), "sensor.json");
+    clutterscope::datasets::parse_sensor_misfit(text, "sensor.json");
+  } catch (const clutterscope::datasets::DatasetError&) {
+  }
+  try {
+    clutterscope::datasets::parse_sensor_noise(text, "sensor.json");
   } catch (const clutterscope::datasets::DatasetError&) {
   }
   return 0;

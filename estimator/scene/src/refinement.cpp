@@ -152,11 +152,17 @@ Eigen::Matrix3d fit_information(const SceneEstimator::State& s,
   if (d.disparity_focal_px > 0 && d.disparity_baseline_m > 0)
     noise.disparity_step_per_m =
         d.disparity_step_px / (d.disparity_focal_px * d.disparity_baseline_m);
+  // How many image pixels' errors count as one: --correlated-pixels, else what the sensor
+  // declares (1 for data the simulator made), else its matching window (a real sensor's).
   // The window is in the depth sensor's pixels; the image's are finer by fx / its focal length.
   const double lateral_scale =
       d.disparity_focal_px > 0 ? o.camera_matrix(0, 0) / d.disparity_focal_px : 1.0;
-  noise.correlated_pixels =
-      correlated ? *correlated : estimator::matching_window_pixels(d.window_half_px, lateral_scale);
+  if (correlated)
+    noise.correlated_pixels = *correlated;
+  else if (d.correlated_pixels > 0)
+    noise.correlated_pixels = d.correlated_pixels;
+  else
+    noise.correlated_pixels = estimator::matching_window_pixels(d.window_half_px, lateral_scale);
   const auto middle = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
   std::nth_element(depths.begin(), middle, depths.end());
   const double sensor_variance = std::max(estimator::depth_variance(noise, *middle), floor);

@@ -104,8 +104,9 @@ void add_estimator_options(CLI::App& command, scene_estimation::EstimateOptions&
   command.add_option_function<double>(
       "--correlated-pixels", [&e](double pixels) { e.correlated_pixels = pixels; },
       "the ICP fit's depth errors count as one per this many image pixels (>= 1; larger: "
-      "wider variances). Default: the sensor's matching window (sensor.json or --sensor with "
-      "--observation synthetic), else the neighbour correlation of the fit's residuals");
+      "wider variances). Default: sensor.json's noise_correlated_pixels (1 for generated data "
+      "and --observation synthetic: the simulator's noise is per pixel), else the sensor's "
+      "matching window, else the neighbour correlation of the fit's residuals");
   command
       .add_option("--min-ess-fraction", e.min_effective_sample_fraction,
                   "adaptive tempering: the unary and non-contact factors of a node are raised to "

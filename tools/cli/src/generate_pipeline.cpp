@@ -284,7 +284,7 @@ GenerateSummary write_dataset(const GenerateOptions& options,
   datasets::BopWriter writer(options.out);
   const std::vector<datasets::Mesh> meshes = write_models(options, catalogue, writer);
   datasets::write_file_atomically(options.out / "sensor.json",
-                                  datasets::to_json(options.sensor).dump(2) + "\n");
+                                  datasets::generated_sensor_json(options.sensor).dump(2) + "\n");
   datasets::write_file_atomically(options.out / "generator.json", options.to_json().dump(2) + "\n");
 
   const render::EglContext context = render::EglContext::create();

@@ -160,10 +160,24 @@ struct DeclaredNoise {
   double noise_a_m = 0, noise_b_per_m = 0, noise_z0_m = 0, quantisation_m = 0;
   double disparity_focal_px = 0, disparity_baseline_m = 0, disparity_step_px = 0;
   double window_half_px = 0;
+  // noise_correlated_pixels: how many image pixels' depth errors are one (>= 1 where present).
+  // 0 where absent: a real sensor's matching window decides (the estimator's default).
+  double correlated_pixels = 0;
 };
+
+// apply_sensor draws every pixel's depth noise on its own (the matching window only adds
+// losses and noise near depth edges, still per pixel): data it made declares
+// noise_correlated_pixels 1 (generated_sensor_json, declared_noise).
+constexpr double kSimulatedNoiseCorrelatedPixels = 1.0;
+
+// The sensor.json of a dataset generated through `options`: to_json(options) with
+// noise_correlated_pixels (kSimulatedNoiseCorrelatedPixels). to_json alone describes a sensor
+// (a preset, `sensor fit`'s), which declares no correlation.
+nlohmann::json generated_sensor_json(const SensorOptions& options);
 DeclaredNoise parse_sensor_noise(const std::string& text, const std::filesystem::path& path);
 DeclaredNoise read_sensor_noise(const std::filesystem::path& path);
-// The same fields of options (synthetic observations through a preset).
+// The same fields of options, for synthetic observations through a preset (apply_sensor):
+// correlated_pixels kSimulatedNoiseCorrelatedPixels.
 DeclaredNoise declared_noise(const SensorOptions& options);
 
 // Flat-shaded colour image (CV_8UC3 BGR): each label's colour (RGB, index = label, 0 the

@@ -124,10 +124,10 @@ struct EstimateOptions {
   // sensor) found fits of side faces the support rules out. At most kMaxOtherFitSteps.
   int other_fit_steps = 2;
   // The fit's information per valid pixel (estimator::pixel_information): image pixels whose
-  // depth errors are one. Unset: the sensor's matching window where the sensor is described
-  // (resolve_pixel_noise), else from the neighbour correlation of the fit's residuals
-  // (--correlated-pixels overrides both). Residual variances are taken at least
-  // min_residual_m^2.
+  // depth errors are one. Unset, where the sensor is described (resolve_pixel_noise): what it
+  // declares (noise_correlated_pixels; 1 for data the simulator made), else its matching
+  // window; else from the neighbour correlation of the fit's residuals (--correlated-pixels
+  // overrides all). Residual variances are taken at least min_residual_m^2.
   std::optional<double> correlated_pixels;
   double min_residual_m = 0.0005;
   // The part of every pixel's residual that is the same on all pixels of a fit and does not
