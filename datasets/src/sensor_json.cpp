@@ -86,11 +86,12 @@ DeclaredNoise parse_sensor_noise(const std::string& text, const std::filesystem:
   noise.disparity_step_px = optional_sigma(json, "disparity_step_px", 10.0, context);
   noise.window_half_px = optional_sigma(json, "window_half_px", 100.0, context);
   if (json.contains("noise_correlated_pixels")) {
-    noise.correlated_pixels = optional_sigma(json, "noise_correlated_pixels", 1e6, context);
-    if (noise.correlated_pixels < 1)
-      context.fail(
-          "noise_correlated_pixels must be >= 1 (image pixels whose errors are one), got " +
-          std::to_string(noise.correlated_pixels));
+    const char* field = "noise_correlated_pixels";
+    noise.correlated_pixels = detail::finite_number(json[field], field, context);
+    if (!(noise.correlated_pixels >= 1 && noise.correlated_pixels <= 1e6))
+      context.fail(std::string(field) +
+                   " must be in [1, 1000000] (image pixels whose errors are one), got " +
+                   std::to_string(noise.correlated_pixels));
   }
   noise.described = noise.noise_a_m > 0 || noise.noise_b_per_m > 0;
   return noise;

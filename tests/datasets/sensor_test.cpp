@@ -520,14 +520,16 @@ TEST(Sensor, SensorJsonDescribesThePixelNoise) {
        {std::string(R"({"noise_a_m": 2})"), std::string(R"({"window_half_px": -1})"),
         std::string(R"({"noise_b_per_m": "x"})"), std::string(R"({"noise_correlated_pixels": 0})"),
         std::string(R"({"noise_correlated_pixels": 0.5})"),
-        std::string(R"({"noise_correlated_pixels": 2e6})")}) {
+        std::string(R"({"noise_correlated_pixels": 2e6})"),
+        std::string(R"({"noise_correlated_pixels": -3})")}) {
     try {
       parse_sensor_noise(bad, "dir/sensor.json");
       ADD_FAILURE() << "accepted " << bad;
     } catch (const DatasetError& error) {
       EXPECT_NE(std::string(error.what()).find("sensor.json"), std::string::npos) << error.what();
       if (bad.find("correlated") != std::string::npos) {
-        EXPECT_NE(std::string(error.what()).find("noise_correlated_pixels"), std::string::npos)
+        EXPECT_NE(std::string(error.what()).find("noise_correlated_pixels must be"),
+                  std::string::npos)
             << error.what();
       }
     }
